@@ -1,0 +1,11 @@
+#pragma once
+// Each subcommand of the `eds` program lives in its own file and registers itself here; the program
+// only parses arguments and calls into the library.
+#include <CLI/CLI.hpp>
+
+namespace eds::app {
+
+void addInfoCommand(CLI::App& app);
+void addEvalCommand(CLI::App& app);
+
+}  // namespace eds::app

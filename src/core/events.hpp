@@ -1,0 +1,46 @@
+#pragma once
+// Events as structure-of-arrays: the per-event loops of the front-end read one field at a time, and
+// contiguous arrays keep them cache friendly and vectorizable.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/time.hpp"
+
+namespace eds {
+
+struct EventArray {
+  std::vector<TimeNs> t;        // nanoseconds
+  std::vector<std::uint16_t> x;  // raw (distorted) pixel column
+  std::vector<std::uint16_t> y;  // raw pixel row
+  std::vector<std::int8_t> p;    // polarity: +1 or -1
+
+  std::size_t size() const { return t.size(); }
+  bool empty() const { return t.empty(); }
+  void clear() {
+    t.clear();
+    x.clear();
+    y.clear();
+    p.clear();
+  }
+  void reserve(std::size_t n) {
+    t.reserve(n);
+    x.reserve(n);
+    y.reserve(n);
+    p.reserve(n);
+  }
+  void push_back(TimeNs ti, std::uint16_t xi, std::uint16_t yi, std::int8_t pi) {
+    t.push_back(ti);
+    x.push_back(xi);
+    y.push_back(yi);
+    p.push_back(pi);
+  }
+  void resize(std::size_t n) {
+    t.resize(n);
+    x.resize(n);
+    y.resize(n);
+    p.resize(n);
+  }
+};
+
+}  // namespace eds

@@ -1,0 +1,153 @@
+#include "io/sequence.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "core/error.hpp"
+#include "io/ecd_events.hpp"
+#include "io/line_reader.hpp"
+#include "io/text_parse.hpp"
+
+namespace eds {
+namespace fs = std::filesystem;
+
+CameraModel readEcdCalib(const fs::path& file) {
+  LineReader reader(file);
+  std::string_view line;
+  std::vector<double> v;
+  std::size_t line_no = 0;
+  while (reader.next(line)) {
+    const char* p = text::skipSpaces(line.data(), line.data() + line.size());
+    const char* end = line.data() + line.size();
+    if (p == end || *p == '#') continue;
+    line_no = reader.lineNumber();
+    while (p < end) {
+      double d;
+      const auto r = std::from_chars(p, end, d);
+      if (r.ec != std::errc() || !text::atFieldEnd(r.ptr, end))
+        throw InputError(reader.fileName(), line_no, "malformed number in '" + std::string(line) + "'");
+      if (!std::isfinite(d)) throw InputError(reader.fileName(), line_no, "non-finite value (NaN or inf)");
+      v.push_back(d);
+      p = text::skipSpaces(r.ptr, end);
+    }
+    break;  // the calibration is the first non-comment line
+  }
+  if (v.empty()) throw InputError(reader.fileName(), "empty calibration file");
+  if (v.size() != 4 && v.size() != 8 && v.size() != 9)
+    throw InputError(reader.fileName(), line_no,
+                     "expected 'fx fy cx cy [k1 k2 p1 p2 [k3]]' (4, 8 or 9 numbers), got " +
+                         std::to_string(v.size()));
+  CameraModel cam;
+  cam.fx = v[0], cam.fy = v[1], cam.cx = v[2], cam.cy = v[3];
+  for (std::size_t i = 4; i < v.size(); ++i) cam.k[i - 4] = v[i];
+  bool any_distortion = false;
+  for (double k : cam.k) any_distortion = any_distortion || k != 0.0;
+  cam.distortion = any_distortion ? Distortion::kRadTan : Distortion::kNone;
+  if (cam.fx <= 0 || cam.fy <= 0)
+    throw InputError(reader.fileName(), line_no, "focal lengths must be positive");
+  return cam;
+}
+
+std::vector<FrameRef> readImageList(const fs::path& file) {
+  LineReader reader(file);
+  std::vector<FrameRef> frames;
+  std::string_view line;
+  const fs::path base = file.parent_path();
+  while (reader.next(line)) {
+    const char* p = text::skipSpaces(line.data(), line.data() + line.size());
+    const char* end = line.data() + line.size();
+    if (p == end || *p == '#') continue;
+    const std::size_t ln = reader.lineNumber();
+    TimeNs t;
+    const char* q = text::parseSecondsNs(p, end, t);
+    if (!q || !text::atFieldEnd(q, end))
+      throw InputError(reader.fileName(), ln, "malformed timestamp in '" + std::string(line) + "'");
+    q = text::skipSpaces(q, end);
+    while (end > q && (end[-1] == ' ' || end[-1] == '\r' || end[-1] == '\t')) --end;
+    if (q == end) throw InputError(reader.fileName(), ln, "missing image path (expected 't path')");
+    const fs::path img = base / std::string(q, end);
+    if (!frames.empty() && t <= frames.back().t)
+      throw InputError(reader.fileName(), ln, "timestamps must increase");
+    std::error_code ec;
+    if (!fs::is_regular_file(img, ec))
+      throw InputError(reader.fileName(), ln, "image file not found: " + img.string());
+    frames.push_back({t, img});
+  }
+  if (frames.empty()) throw InputError(reader.fileName(), "no frames listed");
+  return frames;
+}
+
+Sequence::Sequence(const fs::path& dir) : dir_(dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw InputError(dir.string(), "sequence folder not found");
+  for (const char* name : {"events.txt", "events.txt.gz", "events.h5"}) {
+    if (fs::is_regular_file(dir / name, ec)) {
+      events_file_ = dir / name;
+      break;
+    }
+  }
+  if (fs::is_regular_file(dir / "images.txt", ec)) frames_ = readImageList(dir / "images.txt");
+  if (events_file_.empty() && frames_.empty())
+    throw InputError(dir.string(), "holds neither events (events.txt[.gz], events.h5) nor images.txt");
+  if (fs::is_regular_file(dir / "calib.txt", ec)) camera_ = readEcdCalib(dir / "calib.txt");
+  if (!frames_.empty()) {
+    // ECD calib.txt has no resolution: the images give it.
+    const cv::Mat first = loadFrame(0);
+    width_ = first.cols;
+    height_ = first.rows;
+  }
+  if (camera_) {
+    camera_->width = width_;
+    camera_->height = height_;
+  }
+}
+
+bool Sequence::hasGroundTruth() const {
+  std::error_code ec;
+  return fs::is_regular_file(dir_ / "groundtruth.txt", ec);
+}
+
+const CameraModel& Sequence::camera() const {
+  if (!camera_) throw InputError((dir_ / "calib.txt").string(), "calibration file not found");
+  return *camera_;
+}
+
+std::unique_ptr<EventSource> Sequence::openEvents() const {
+  if (events_file_.empty())
+    throw InputError((dir_ / "events.txt").string(), "file not found (this sequence has no events)");
+  EcdEventOptions opts;
+  opts.width = width_;
+  opts.height = height_;
+  return std::make_unique<EcdEventSource>(events_file_, opts);
+}
+
+cv::Mat Sequence::loadFrame(std::size_t i) const {
+  if (i >= frames_.size()) throw std::out_of_range("Sequence::loadFrame: frame index out of range");
+  const std::string path = frames_[i].path.string();
+  cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (img.empty()) throw InputError(path, "cannot read image (missing or not an image)");
+  if (width_ > 0 && (img.cols != width_ || img.rows != height_))
+    throw InputError(path, "image size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                               " differs from the sequence's " + std::to_string(width_) + "x" +
+                               std::to_string(height_));
+  return img;
+}
+
+std::optional<cv::Mat> Sequence::loadDepth(std::size_t i) const {
+  if (i >= frames_.size()) throw std::out_of_range("Sequence::loadDepth: frame index out of range");
+  const fs::path path = dir_ / "depth" / frames_[i].path.filename();
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return std::nullopt;
+  cv::Mat mm = cv::imread(path.string(), cv::IMREAD_ANYDEPTH);
+  if (mm.empty() || mm.type() != CV_16U) throw InputError(path.string(), "depth map must be a uint16 PNG (mm)");
+  cv::Mat metres;
+  mm.convertTo(metres, CV_32F, 1e-3);
+  return metres;
+}
+
+Trajectory Sequence::groundTruth() const { return readTum(dir_ / "groundtruth.txt"); }
+
+}  // namespace eds

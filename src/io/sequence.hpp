@@ -1,0 +1,69 @@
+#pragma once
+// A recorded (or simulated) sequence on disk in the ECD folder layout:
+//   events.txt | events.txt.gz | events.h5   events (optional)
+//   images.txt + images/                     frames (optional)
+//   calib.txt | camchain.yaml                calibration (ECD line or Kalibr camchain)
+//   groundtruth.txt                          T_w_c in TUM order (optional)
+//   depth/<frame name>.png                   z-depth in mm, uint16 (optional, simulated data)
+// Files are opened only when asked for, so a frames-only or events-only sequence works, and a file is
+// "missing" only when the requested work needs it.
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/camera.hpp"
+#include "io/event_source.hpp"
+#include "io/trajectory_io.hpp"
+
+namespace eds {
+
+struct FrameRef {
+  TimeNs t = 0;
+  std::filesystem::path path;
+};
+
+class Sequence {
+ public:
+  // Scans the folder; parses images.txt and the calibration (small files) eagerly so their errors
+  // surface at once. Throws InputError if the folder does not exist or holds neither events nor frames.
+  explicit Sequence(const std::filesystem::path& dir);
+
+  const std::filesystem::path& dir() const { return dir_; }
+  bool hasEvents() const { return !events_file_.empty(); }
+  bool hasFrames() const { return !frames_.empty(); }
+  bool hasGroundTruth() const;
+  bool hasCalibration() const { return camera_.has_value(); }
+
+  // Calibration with resolution (from the Kalibr file, else the first image, else unknown = 0).
+  const CameraModel& camera() const;
+  const std::filesystem::path& eventsFile() const { return events_file_; }
+  std::unique_ptr<EventSource> openEvents() const;
+
+  const std::vector<FrameRef>& frames() const { return frames_; }
+  // The raw (distorted) 8-bit grayscale frame i; InputError naming the image file if unreadable.
+  cv::Mat loadFrame(std::size_t i) const;
+  // z-depth in metres (CV_32F) for frame i, from depth/<name>.png; nullopt if there is none.
+  std::optional<cv::Mat> loadDepth(std::size_t i) const;
+
+  Trajectory groundTruth() const;  // InputError if groundtruth.txt is missing
+  // Sensor size known from calibration or images; 0 when unknown.
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  std::filesystem::path dir_;
+  std::filesystem::path events_file_;
+  std::vector<FrameRef> frames_;
+  std::optional<CameraModel> camera_;
+  int width_ = 0, height_ = 0;
+};
+
+// Reads an ECD calib.txt (`fx fy cx cy [k1 k2 p1 p2 [k3]]`, radtan). The size is left at 0.
+CameraModel readEcdCalib(const std::filesystem::path& file);
+// Reads images.txt (`t images/frame_X.png`); paths relative to the file's folder, checked to exist.
+std::vector<FrameRef> readImageList(const std::filesystem::path& file);
+
+}  // namespace eds
