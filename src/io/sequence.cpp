@@ -89,6 +89,8 @@ Sequence::Sequence(const fs::path& dir) : dir_(dir) {
       break;
     }
   }
+  if (!events_file_.empty() && fs::file_size(events_file_, ec) == 0)
+    throw InputError(events_file_.string(), "events file is empty");
   if (fs::is_regular_file(dir / "images.txt", ec)) frames_ = readImageList(dir / "images.txt");
   if (events_file_.empty() && frames_.empty())
     throw InputError(dir.string(), "holds neither events (events.txt[.gz], events.h5) nor images.txt");
