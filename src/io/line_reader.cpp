@@ -66,6 +66,18 @@ bool LineReader::refill() {
   return got > 0;
 }
 
+std::string_view LineReader::available() {
+  for (;;) {
+    const char* start = buf_.data() + begin_;
+    const std::size_t avail = end_ - begin_;
+    // Last '\n' in the buffer: everything before it is whole lines.
+    std::size_t last = avail;
+    while (last > 0 && start[last - 1] != '\n') --last;
+    if (last > 0) return {start, last};
+    if (!refill()) return {start, end_ - begin_};  // unterminated last line, or empty at the end
+  }
+}
+
 bool LineReader::next(std::string_view& line) {
   for (;;) {
     const char* start = buf_.data() + begin_;

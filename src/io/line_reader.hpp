@@ -23,6 +23,15 @@ class LineReader {
   // Returns false at the end of the file. The view is valid until the next call.
   bool next(std::string_view& line);
   std::size_t lineNumber() const { return line_no_; }
+
+  // Bulk access for hot parsers: a view of whole lines (ending in '\n', or the file's unterminated
+  // last line) without copying; empty at the end of the file. After parsing a prefix, the caller
+  // calls consume() with the bytes and lines it used.
+  std::string_view available();
+  void consume(std::size_t bytes, std::size_t lines) {
+    begin_ += bytes;
+    line_no_ += lines;
+  }
   const std::string& fileName() const { return name_; }
   bool compressed() const { return gz_ != nullptr; }
 
