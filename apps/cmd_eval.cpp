@@ -1,0 +1,121 @@
+// `eds eval`: absolute trajectory error and coverage of an estimate against ground truth, with the
+// conventions of rpg_trajectory_evaluation (DESIGN.md section 5).
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "eval/ate.hpp"
+#include "eval/rpe.hpp"
+#include "eval/rpg_folder.hpp"
+
+namespace eds::app {
+namespace {
+
+struct EvalOptions {
+  std::string gt, est, dir, align, time_window, json;
+  int align_frames = -1;
+  bool align_frames_given = false;
+  bool rpe = false;
+};
+
+void printStatsRow(const char* name, const eval::ErrorStats& s, double factor, const char* unit) {
+  std::printf("  %-12s %10.4f %10.4f %10.4f %10.4f  %s\n", name, s.rmse * factor, s.mean * factor,
+              s.median * factor, s.max * factor, unit);
+}
+
+void printReport(const EvalOptions& o, const eval::AteResult& r) {
+  std::printf("ground truth : %s\n", o.gt.c_str());
+  std::printf("estimate     : %s\n", o.est.c_str());
+  std::printf("alignment    : %s over %s, scale %.6f\n", eval::toString(r.alignment).c_str(),
+              r.align_frames == -1 ? "all poses" : (std::to_string(r.align_frames) + " poses").c_str(),
+              r.transform.s);
+  std::printf("matched pairs: %zu\n", r.pairs.size());
+  std::printf("coverage     : %.1f %%\n", 100.0 * r.coverage);
+  std::printf("  %-12s %10s %10s %10s %10s\n", "", "rmse", "mean", "median", "max");
+  printStatsRow("translation", r.trans, 1.0, "m");
+  printStatsRow("translation", r.trans, 100.0, "cm");
+  printStatsRow("rotation", r.rot, 1.0, "deg");
+}
+
+void printRpe(const std::vector<eval::RpeResult>& rpe) {
+  std::printf("relative error (sub-trajectories by ground-truth path length):\n");
+  std::printf("  %10s %6s %12s %10s %12s %12s\n", "length m", "n", "trans rmse m", "trans %", "rot rmse deg",
+              "yaw rmse deg");
+  for (const eval::RpeResult& r : rpe)
+    std::printf("  %10.2f %6zu %12.4f %10.2f %12.4f %12.4f\n", r.distance, r.trans.num_samples, r.trans.rmse,
+                r.trans_perc.rmse, r.rot.rmse, r.yaw.rmse);
+}
+
+void runEval(EvalOptions o) {
+  eval::EvalConfig cfg;
+  if (!o.dir.empty()) {
+    const std::filesystem::path dir(o.dir);
+    cfg = eval::loadRpgConfig(dir);
+    if (o.gt.empty()) o.gt = (dir / eval::kRpgGroundTruthFile).string();
+    if (o.est.empty()) o.est = (dir / eval::kRpgEstimateFile).string();
+  }
+  // Explicit options override the folder's configuration.
+  if (!o.align.empty()) cfg.alignment = eval::parseAlignment(o.align);
+  if (o.align_frames_given) cfg.align_frames = o.align_frames;
+  if (!o.time_window.empty()) cfg.window = eval::readTimeWindowYaml(o.time_window);
+
+  const eval::EvalInputs in = eval::readEvalInputs(o.gt, o.est);
+  const eval::AteResult r = eval::evaluateAte(in, cfg);
+  printReport(o, r);
+  nlohmann::json j = eval::toJson(r);
+  if (o.rpe) {
+    const std::vector<eval::RpeResult> rpe = eval::evaluateRpe(in.est, in.gt, r, cfg);
+    printRpe(rpe);
+    j["rpe"] = eval::toJson(rpe);
+  }
+  if (!o.json.empty()) eval::writeJson(o.json, j);
+}
+
+}  // namespace
+
+void addEvalCommand(CLI::App& app) {
+  auto opts = std::make_shared<EvalOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "eval", "Absolute trajectory error (rpg_trajectory_evaluation conventions) and coverage");
+  auto* gt = cmd->add_option("--gt", opts->gt, "ground-truth trajectory (TUM)")->check(CLI::ExistingFile);
+  auto* est = cmd->add_option("--est", opts->est, "estimated trajectory (TUM)")->check(CLI::ExistingFile);
+  auto* dir = cmd->add_option("--dir", opts->dir,
+                              "rpg-style folder: stamped_groundtruth.txt, stamped_traj_estimate.txt, "
+                              "optional eval_cfg.yaml and start_end_time.yaml")
+                  ->check(CLI::ExistingDirectory);
+  gt->excludes(dir);
+  est->excludes(dir);
+  gt->needs(est);
+  est->needs(gt);
+  cmd->add_option("--align", opts->align, "alignment (default sim3, or the folder's eval_cfg.yaml)")
+      ->check(CLI::IsMember({"sim3", "se3", "posyaw", "none"}));
+  auto* frames =
+      cmd->add_option("--align-frames", opts->align_frames, "align over the first K matched poses; -1 = all")
+          ->check(CLI::Validator(
+              [](std::string& v) -> std::string {
+                int k = 0;
+                // Conversion errors are reported by CLI11 itself after validation.
+                if (!CLI::detail::lexical_cast(v, k)) return "";
+                return k == -1 || k > 0 ? "" : "must be -1 (all) or a positive count";
+              },
+              "-1|K>0"));
+  cmd->add_option("--time-window", opts->time_window,
+                  "start_end_time.yaml: keep pairs whose ground-truth stamp lies inside")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--json", opts->json, "write the result as JSON");
+  cmd->add_flag("--rpe", opts->rpe,
+                "also compute relative errors over 10..50 % of the ground-truth path length");
+  cmd->callback([opts, frames] {
+    opts->align_frames_given = frames->count() > 0;
+    if (opts->dir.empty() && opts->gt.empty())
+      throw CLI::ValidationError("eval", "give --gt and --est, or --dir");
+    runEval(*opts);
+  });
+}
+
+}  // namespace eds::app

@@ -1,0 +1,174 @@
+#include "eval/ate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <stdexcept>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace eds::eval {
+namespace {
+
+// Angle of a rotation matrix in radians via its quaternion; atan2 keeps precision near 0 and pi.
+double rotationAngle(const Mat3& R) {
+  const Quat q(R);
+  return 2.0 * std::atan2(q.vec().norm(), std::abs(q.w()));
+}
+
+}  // namespace
+
+nlohmann::json toJson(const ErrorStats& s) {
+  return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},          {"std", s.std},
+          {"min", s.min},   {"max", s.max},   {"num_samples", s.num_samples}};
+}
+
+ErrorStats computeStats(const std::vector<double>& values) {
+  ErrorStats s;
+  s.num_samples = values.size();
+  if (values.empty()) return s;
+  const double n = static_cast<double>(values.size());
+  double sum = 0.0, sum_sq = 0.0;
+  for (const double v : values) {
+    sum += v;
+    sum_sq += v * v;
+  }
+  s.mean = sum / n;
+  s.rmse = std::sqrt(sum_sq / n);
+  // Two-pass variance: the one-pass formula cancels badly when the spread is small.
+  double var = 0.0;
+  for (const double v : values) var += (v - s.mean) * (v - s.mean);
+  s.std = std::sqrt(var / n);
+  std::vector<double> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  const std::size_t m = sorted.size() / 2;
+  s.median = sorted.size() % 2 == 1 ? sorted[m] : 0.5 * (sorted[m - 1] + sorted[m]);
+  s.min = sorted.front();
+  s.max = sorted.back();
+  return s;
+}
+
+double computeCoverage(const Trajectory& est, const Trajectory& gt, const std::vector<MatchedPair>& pairs,
+                       const std::optional<TimeWindow>& window, TimeNs max_gap) {
+  if (gt.empty()) return 0.0;
+  const auto [gt_min, gt_max] = std::minmax_element(
+      gt.begin(), gt.end(), [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+  TimeNs span_start = gt_min->t, span_end = gt_max->t;
+  if (window) {
+    span_start = std::max(span_start, window->start);
+    span_end = std::min(span_end, window->end);
+  }
+  if (span_end <= span_start) return 0.0;
+
+  std::vector<TimeNs> stamps;
+  stamps.reserve(pairs.size());
+  for (const MatchedPair& p : pairs) stamps.push_back(est[p.est].t);
+  std::sort(stamps.begin(), stamps.end());
+  TimeNs covered = 0;
+  for (std::size_t i = 1; i < stamps.size(); ++i) {
+    if (stamps[i] - stamps[i - 1] > max_gap) continue;
+    // Matched estimates may lie up to max_dt outside the span; that time is not gt time.
+    const TimeNs a = std::max(stamps[i - 1], span_start);
+    const TimeNs b = std::min(stamps[i], span_end);
+    if (b > a) covered += b - a;
+  }
+  return std::clamp(static_cast<double>(covered) / static_cast<double>(span_end - span_start), 0.0, 1.0);
+}
+
+AteResult evaluateAte(const Trajectory& est, const Trajectory& gt, const EvalConfig& cfg) {
+  std::vector<MatchedPair> pairs = associate(est, gt, cfg.max_dt);
+  if (cfg.window) pairs = filterByGtWindow(pairs, gt, *cfg.window);
+  return evaluateAtePairs(est, gt, std::move(pairs), cfg);
+}
+
+AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vector<MatchedPair> pairs,
+                           const EvalConfig& cfg) {
+  AteResult r;
+  r.alignment = cfg.alignment;
+  r.align_frames = cfg.align_frames;
+  r.pairs = std::move(pairs);
+  if (r.pairs.empty()) throw std::invalid_argument("no estimated pose matches the ground truth");
+
+  const std::size_t n = r.pairs.size();
+  std::vector<Vec3> p_gt(n), p_est(n);
+  std::vector<Quat> q_gt(n), q_est(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const SE3& G = gt[r.pairs[i].gt].T_w_c;
+    const SE3& E = est[r.pairs[i].est].T_w_c;
+    p_gt[i] = G.translation();
+    q_gt[i] = G.quaternion();
+    p_est[i] = E.translation();
+    q_est[i] = E.quaternion();
+  }
+  r.transform = alignTrajectory(p_gt, q_gt, p_est, q_est, cfg.alignment, cfg.align_frames);
+
+  r.trans_errors.resize(n);
+  r.rot_errors_deg.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    r.trans_errors[i] = (p_gt[i] - r.transform.apply(p_est[i])).norm();
+    const Mat3 E = (r.transform.R * q_est[i].toRotationMatrix()) * q_gt[i].toRotationMatrix().transpose();
+    r.rot_errors_deg[i] = rotationAngle(E) * 180.0 / std::numbers::pi;
+  }
+  r.trans = computeStats(r.trans_errors);
+  r.rot = computeStats(r.rot_errors_deg);
+  r.coverage = computeCoverage(est, gt, r.pairs, cfg.window, cfg.max_coverage_gap);
+  return r;
+}
+
+EvalInputs readEvalInputs(const std::filesystem::path& gt_file, const std::filesystem::path& est_file) {
+  EvalInputs in{gt_file, est_file, readTum(gt_file, true), readTum(est_file, true)};
+  if (in.gt.empty()) throw InputError(gt_file.string(), "ground-truth trajectory is empty");
+  if (in.est.empty()) throw InputError(est_file.string(), "estimated trajectory is empty");
+  return in;
+}
+
+AteResult evaluateAte(const EvalInputs& in, const EvalConfig& cfg) {
+  const std::string gt_name = in.gt_file.string(), est_name = in.est_file.string();
+  std::vector<MatchedPair> pairs = associate(in.est, in.gt, cfg.max_dt);
+  char max_dt_ms[32];
+  std::snprintf(max_dt_ms, sizeof(max_dt_ms), "%g", static_cast<double>(cfg.max_dt) * 1e-6);
+  if (pairs.empty())
+    throw InputError(
+        est_name, "no pose is within " + std::string(max_dt_ms) + " ms of a pose of ground truth " + gt_name);
+  const std::size_t num_matched = pairs.size();
+  if (cfg.window) pairs = filterByGtWindow(pairs, in.gt, *cfg.window);
+  if (pairs.empty())
+    throw InputError(est_name, "none of the " + std::to_string(num_matched) +
+                                   " poses matched with ground truth " + gt_name +
+                                   " lies inside the time window");
+  try {
+    return evaluateAtePairs(in.est, in.gt, std::move(pairs), cfg);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(est_name, std::string(e.what()) + " (ground truth " + gt_name + ")");
+  }
+}
+
+AteResult evaluateAteFiles(const std::filesystem::path& gt_file, const std::filesystem::path& est_file,
+                           const EvalConfig& cfg) {
+  return evaluateAte(readEvalInputs(gt_file, est_file), cfg);
+}
+
+nlohmann::json toJson(const AteResult& r) {
+  return {{"trans", toJson(r.trans)},
+          {"rot", toJson(r.rot)},
+          {"matched_pairs", r.pairs.size()},
+          {"coverage", r.coverage},
+          {"alignment", toString(r.alignment)},
+          {"align_frames", r.align_frames},
+          {"scale", r.transform.s}};
+}
+
+void writeJson(const std::filesystem::path& file, const AteResult& r) { writeJson(file, toJson(r)); }
+
+void writeJson(const std::filesystem::path& file, const nlohmann::json& j) {
+  std::ofstream f(file);
+  if (!f) throw InputError(file.string(), "cannot open for writing");
+  f << j.dump(2) << "\n";
+  if (!f) throw InputError(file.string(), "write failed");
+}
+
+}  // namespace eds::eval
