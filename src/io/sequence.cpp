@@ -8,6 +8,8 @@
 
 #include "core/error.hpp"
 #include "io/ecd_events.hpp"
+#include "io/hdf5_events.hpp"
+#include "io/kalibr.hpp"
 #include "io/line_reader.hpp"
 #include "io/text_parse.hpp"
 
@@ -48,6 +50,30 @@ CameraModel readEcdCalib(const fs::path& file) {
   cam.distortion = any_distortion ? Distortion::kRadTan : Distortion::kNone;
   if (cam.fx <= 0 || cam.fy <= 0)
     throw InputError(reader.fileName(), line_no, "focal lengths must be positive");
+  return cam;
+}
+
+CameraModel cameraFromKalibr(const KalibrCamera& k, const std::string& source) {
+  CameraModel cam;
+  cam.width = k.width;
+  cam.height = k.height;
+  cam.fx = k.fx, cam.fy = k.fy, cam.cx = k.cx, cam.cy = k.cy;
+  if (k.distortion_model == "radtan") {
+    cam.distortion = Distortion::kRadTan;
+  } else if (k.distortion_model == "equidistant") {
+    cam.distortion = Distortion::kEquidistant;
+  } else if (k.distortion_model == "none" || k.distortion_model.empty()) {
+    cam.distortion = Distortion::kNone;
+  } else {
+    throw InputError(source, "unsupported distortion_model '" + k.distortion_model + "'");
+  }
+  if (k.distortion_coeffs.size() > cam.k.size()) throw InputError(source, "too many distortion_coeffs");
+  for (std::size_t i = 0; i < k.distortion_coeffs.size(); ++i) cam.k[i] = k.distortion_coeffs[i];
+  try {
+    cam.validate(source);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(source, e.what());
+  }
   return cam;
 }
 
@@ -94,12 +120,23 @@ Sequence::Sequence(const fs::path& dir) : dir_(dir) {
   if (fs::is_regular_file(dir / "images.txt", ec)) frames_ = readImageList(dir / "images.txt");
   if (events_file_.empty() && frames_.empty())
     throw InputError(dir.string(), "holds neither events (events.txt[.gz], events.h5) nor images.txt");
-  if (fs::is_regular_file(dir / "calib.txt", ec)) camera_ = readEcdCalib(dir / "calib.txt");
-  if (!frames_.empty()) {
+  // A Kalibr camchain (with resolution) wins over calib.txt (without).
+  for (const char* name : {"camchain.yaml", "calib.yaml"}) {
+    if (fs::is_regular_file(dir / name, ec)) {
+      camera_ = cameraFromKalibr(readKalibrCamera((dir / name).string()), (dir / name).string());
+      width_ = camera_->width;
+      height_ = camera_->height;
+      break;
+    }
+  }
+  if (!camera_ && fs::is_regular_file(dir / "calib.txt", ec)) camera_ = readEcdCalib(dir / "calib.txt");
+  if (!frames_.empty() && width_ == 0) {
     // ECD calib.txt has no resolution: the images give it.
     const cv::Mat first = loadFrame(0);
     width_ = first.cols;
     height_ = first.rows;
+  } else if (!frames_.empty()) {
+    loadFrame(0);  // checks the images against a Kalibr resolution
   }
   if (camera_) {
     camera_->width = width_;
@@ -120,6 +157,12 @@ const CameraModel& Sequence::camera() const {
 std::unique_ptr<EventSource> Sequence::openEvents() const {
   if (events_file_.empty())
     throw InputError((dir_ / "events.txt").string(), "file not found (this sequence has no events)");
+  if (events_file_.extension() == ".h5") {
+    Hdf5EventOptions opts;
+    opts.width = width_;
+    opts.height = height_;
+    return std::make_unique<Hdf5EventSource>(events_file_.string(), opts);
+  }
   EcdEventOptions opts;
   opts.width = width_;
   opts.height = height_;

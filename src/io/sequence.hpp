@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -63,6 +64,9 @@ class Sequence {
 
 // Reads an ECD calib.txt (`fx fy cx cy [k1 k2 p1 p2 [k3]]`, radtan). The size is left at 0.
 CameraModel readEcdCalib(const std::filesystem::path& file);
+struct KalibrCamera;
+// Converts a Kalibr camera to a CameraModel; InputError naming `source` if unsupported or invalid.
+CameraModel cameraFromKalibr(const KalibrCamera& k, const std::string& source);
 // Reads images.txt (`t images/frame_X.png`); paths relative to the file's folder, checked to exist.
 std::vector<FrameRef> readImageList(const std::filesystem::path& file);
 

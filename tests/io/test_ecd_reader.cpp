@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "io/ecd_events.hpp"
+#include "io/hdf5_events.hpp"
 #include "io/merged_stream.hpp"
 #include "io/sequence.hpp"
 #include "io/sequence_stats.hpp"
@@ -174,6 +175,31 @@ TEST(MergedStream, EventsNeverPassTheNextFrame) {
   }
   EXPECT_EQ(events, 1000u);
   EXPECT_EQ(frames, 5u);
+}
+
+}  // namespace
+}  // namespace eds
+
+namespace eds {
+namespace {
+
+TEST(Sequence, Hdf5EventsWithKalibrCalibration) {
+  const auto dir = test::tempDir("seq_h5");
+  EventArray ev;
+  for (int i = 0; i < 5000; ++i) ev.push_back(1'000'000LL * i, i % 346, i % 260, i % 2 ? 1 : -1);
+  writeHdf5Events((dir / "events.h5").string(), ev, 0);
+  std::ofstream(dir / "camchain.yaml") << "cam0:\n  camera_model: pinhole\n  intrinsics: [180.0, 181.0, 170.0, 128.0]\n"
+                                          "  distortion_model: equidistant\n"
+                                          "  distortion_coeffs: [0.05, -0.02, 0.004, -0.001]\n"
+                                          "  resolution: [346, 260]\n";
+  const Sequence seq(dir);
+  EXPECT_EQ(seq.width(), 346);
+  EXPECT_EQ(seq.camera().distortion, Distortion::kEquidistant);
+  EXPECT_DOUBLE_EQ(seq.camera().k[3], -0.001);
+  const SequenceStats s = computeStats(seq);
+  EXPECT_EQ(s.events, 5000u);
+  EXPECT_EQ(s.events_t1, 4999'000'000LL);
+  EXPECT_FALSE(seq.hasFrames());
 }
 
 }  // namespace

@@ -1,0 +1,68 @@
+#pragma once
+// Events in HDF5 files with the DSEC / EDS-dataset layout:
+//   events/x, events/y (pixel), events/t (microseconds, relative to t_offset), events/p (0/1),
+//   optional ms_to_idx (ms_to_idx[i] = first event with t >= i*1000 µs) and t_offset (µs, scalar).
+// Any integer storage type is accepted for each field; HDF5 converts to the memory type and a value
+// that does not fit is reported instead of being clipped silently.
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "core/events.hpp"
+#include "core/time.hpp"
+#include "io/event_source.hpp"
+
+namespace eds {
+
+struct Hdf5EventOptions {
+  // Sensor size; when > 0 every pixel is checked against it (0 disables the check).
+  int width = 0;
+  int height = 0;
+};
+
+class Hdf5EventSource : public EventSource {
+ public:
+  // Opens and validates the layout (datasets present, 1-D, integer, equal non-zero lengths). The
+  // values themselves are validated as they are read. Throws InputError naming the file.
+  explicit Hdf5EventSource(const std::string& path, Hdf5EventOptions options = {});
+  ~Hdf5EventSource() override;
+  Hdf5EventSource(const Hdf5EventSource&) = delete;
+  Hdf5EventSource& operator=(const Hdf5EventSource&) = delete;
+
+  std::size_t read(EventArray& out, std::size_t max_events) override;
+  std::optional<std::size_t> size() const override;
+
+  // Positions the stream at the first event with t >= t_ns (the end if there is none). With
+  // ms_to_idx the search is narrowed to one millisecond; without it, a binary search over events/t.
+  void seek(TimeNs t_ns);
+  // Positions the stream at an event index (clamped to size()).
+  void seekIndex(std::size_t index);
+  std::size_t position() const;
+
+  TimeNs tOffsetNs() const;
+  bool hasMsToIdx() const;
+  TimeNs firstTimeNs() const;  // time of event 0
+  TimeNs lastTimeNs() const;   // time of the last event
+  const std::string& path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+enum class Hdf5Compression { kNone, kGzip, kBloscIfAvailable };
+
+// Writes the DSEC layout (x, y: uint16, t: int64 µs relative to t_offset_us, p: uint8 0/1,
+// ms_to_idx: uint64, t_offset: int64 scalar). Times are stored in whole microseconds (floor).
+// kBloscIfAvailable falls back to gzip when the blosc plugin cannot be loaded. Returns the
+// compression actually used. Throws InputError naming the file on failure.
+Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& events,
+                                std::int64_t t_offset_us,
+                                Hdf5Compression compression = Hdf5Compression::kNone);
+
+// True when HDF5 can load the blosc filter (after adding the Debian plugin directory).
+bool hdf5BloscAvailable();
+
+}  // namespace eds
