@@ -1,91 +1,31 @@
 #include "io/hdf5_events.hpp"
 
-#include <dlfcn.h>
 #include <hdf5.h>
 
 #include <algorithm>
 #include <array>
-#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <utility>
 #include <vector>
 
 #include "core/error.hpp"
+#include "io/hdf5_common.hpp"
 
 namespace eds {
 namespace {
 
 namespace fs = std::filesystem;
 
-// Owns an HDF5 identifier and closes it with the matching H5?close.
-class Hid {
- public:
-  Hid() = default;
-  Hid(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  Hid(Hid&& o) noexcept : id_(std::exchange(o.id_, H5I_INVALID_HID)), close_(o.close_) {}
-  Hid& operator=(Hid&& o) noexcept {
-    if (this != &o) {
-      reset();
-      id_ = std::exchange(o.id_, H5I_INVALID_HID);
-      close_ = o.close_;
-    }
-    return *this;
-  }
-  ~Hid() { reset(); }
-  void reset() {
-    if (id_ >= 0 && close_ != nullptr) close_(id_);
-    id_ = H5I_INVALID_HID;
-  }
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
+using hdf5::failH5;
+using hdf5::floorDiv;
+using hdf5::Hid;
+using hdf5::kBloscFilter;
+using hdf5::loadBlosc;
+using hdf5::QuietHdf5;
 
- private:
-  hid_t id_ = H5I_INVALID_HID;
-  herr_t (*close_)(hid_t) = nullptr;
-};
-
-// HDF5 prints its error stack to stderr by default; eds reports InputError instead. The previous
-// handler is restored so that an application using HDF5 elsewhere keeps its own setting.
-class QuietHdf5 {
- public:
-  QuietHdf5() {
-    H5Eget_auto2(H5E_DEFAULT, &func_, &data_);
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  }
-  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, func_, data_); }
-  QuietHdf5(const QuietHdf5&) = delete;
-  QuietHdf5& operator=(const QuietHdf5&) = delete;
-
- private:
-  H5E_auto2_t func_ = nullptr;
-  void* data_ = nullptr;
-};
-
-// The outermost and innermost messages of HDF5's error stack: what failed and why.
-std::string lastHdf5Error() {
-  std::pair<std::string, std::string> msgs;
-  auto collect = [](unsigned n, const H5E_error2_t* err, void* data) -> herr_t {
-    auto* m = static_cast<std::pair<std::string, std::string>*>(data);
-    if (err->desc == nullptr) return 0;
-    if (n == 0) m->first = err->desc;
-    m->second = err->desc;
-    return 0;
-  };
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collect, &msgs);
-  H5Eclear2(H5E_DEFAULT);
-  if (msgs.first.empty()) return "";
-  if (msgs.first == msgs.second) return " (HDF5: " + msgs.first + ")";
-  return " (HDF5: " + msgs.first + ": " + msgs.second + ")";
-}
-
-constexpr H5Z_filter_t kBloscFilter = 32001;  // id registered with The HDF Group
 enum Field { kT = 0, kX = 1, kY = 2, kP = 3 };
 constexpr std::array<const char*, 4> kFieldNames = {"events/t", "events/x", "events/y", "events/p"};
-
-[[noreturn]] void failH5(const std::string& file, const std::string& what) {
-  throw InputError(file, what + lastHdf5Error());
-}
 
 // Called by HDF5 when a stored value does not fit the memory type: the default would clip it
 // silently (a negative x would become 0), so the read is aborted and reported instead.
@@ -95,54 +35,6 @@ H5T_conv_ret_t abortOnOverflow(H5T_conv_except_t type, hid_t, hid_t, void*, void
   }
   *static_cast<bool*>(flag) = true;
   return H5T_CONV_ABORT;
-}
-
-std::int64_t floorDiv(std::int64_t a, std::int64_t b) {
-  return a / b - ((a % b != 0) && ((a < 0) != (b < 0)));
-}
-
-// Debian installs filter plugins next to the HDF5 library (<libdir>/hdf5/serial/plugins). Its own
-// HDF5 searches there by default, but an HDF5 built elsewhere (static, self-built) does not; adding
-// the directory lets blosc files open without HDF5_PLUGIN_PATH either way.
-void addPluginPath() {
-  if (std::getenv("HDF5_PLUGIN_PATH") != nullptr) return;  // the user's setting wins
-  std::vector<fs::path> candidates;
-  Dl_info info{};
-  if (dladdr(reinterpret_cast<void*>(&H5open), &info) != 0 && info.dli_fname != nullptr) {
-    candidates.push_back(fs::path(info.dli_fname).parent_path() / "hdf5/serial/plugins");
-  }
-  std::error_code ec;
-  // Fallback for a statically linked HDF5: the multiarch directories.
-  for (const auto& entry : fs::directory_iterator("/usr/lib", ec)) {
-    if (entry.path().filename().string().ends_with("-linux-gnu")) {
-      candidates.push_back(entry.path() / "hdf5/serial/plugins");
-    }
-  }
-  unsigned count = 0;
-  if (H5PLsize(&count) < 0) return;
-  std::vector<std::string> present;
-  for (unsigned i = 0; i < count; ++i) {
-    std::array<char, 4096> buf{};
-    if (H5PLget(i, buf.data(), buf.size()) > 0) present.emplace_back(buf.data());
-  }
-  for (const auto& dir : candidates) {
-    if (!fs::is_directory(dir, ec)) continue;
-    const std::string canonical = fs::canonical(dir, ec).string();
-    if (ec || std::find(present.begin(), present.end(), canonical) != present.end()) continue;
-    if (H5PLappend(canonical.c_str()) >= 0) present.push_back(canonical);
-  }
-}
-
-// Loads the blosc filter if needed. Blosc keeps a global context that only blosc_destroy() frees,
-// which the plugin never calls; when HDF5 unloads the plugin at exit, that memory becomes
-// unreachable and LeakSanitizer fails the program. Pinning the loaded libraries keeps it reachable.
-bool loadBlosc() {
-  addPluginPath();
-  if (H5Zfilter_avail(kBloscFilter) <= 0) return false;
-  for (const char* soname : {"libH5Zblosc.so", "libblosc.so.1"}) {
-    if (void* handle = dlopen(soname, RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE)) dlclose(handle);
-  }
-  return true;
 }
 
 // Finds the one dataset, checks that it is a non-empty 1-D integer array whose filters HDF5 can
@@ -350,7 +242,7 @@ Hdf5EventSource::Hdf5EventSource(const std::string& path, Hdf5EventOptions optio
   if (!fs::exists(path, ec)) throw InputError(path, "file does not exist");
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "not a regular file");
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path, "not an HDF5 file");
-  addPluginPath();
+  hdf5::addPluginPath();
   // HDF5 serves small reads of contiguous data through a 64 KiB sieve buffer, refilled on every
   // binary-search probe of seek(); bulk reads bypass it, so a small one costs nothing there.
   Hid fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
@@ -492,77 +384,6 @@ void Hdf5EventSource::seek(TimeNs t_ns) {
 bool hdf5BloscAvailable() {
   QuietHdf5 quiet;
   return loadBlosc();
-}
-
-Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& events,
-                                std::int64_t t_offset_us, Hdf5Compression compression) {
-  if (compression == Hdf5Compression::kBloscIfAvailable && !hdf5BloscAvailable()) {
-    compression = Hdf5Compression::kGzip;
-  }
-  QuietHdf5 quiet;
-  const std::size_t n = events.size();
-  std::vector<std::int64_t> t_us(n);
-  std::vector<std::uint8_t> p01(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    t_us[i] = floorDiv(events.t[i], 1000) - t_offset_us;
-    p01[i] = events.p[i] > 0 ? 1 : 0;
-  }
-  std::vector<std::uint64_t> ms_to_idx;
-  if (n > 0) {
-    const std::int64_t last_ms = std::max<std::int64_t>(t_us.back(), 0) / 1000;
-    ms_to_idx.resize(static_cast<std::size_t>(last_ms) + 1);
-    std::size_t idx = 0;
-    for (std::size_t ms = 0; ms < ms_to_idx.size(); ++ms) {
-      while (idx < n && t_us[idx] < static_cast<std::int64_t>(ms) * 1000) ++idx;
-      ms_to_idx[ms] = idx;
-    }
-  }
-
-  Hid file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-  if (!file.valid()) failH5(path, "cannot create the HDF5 file");
-  Hid group(H5Gcreate2(file.get(), "events", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
-  if (!group.valid()) failH5(path, "cannot create group events");
-
-  auto write = [&](const char* name, hid_t ftype, hid_t mtype, const void* data, std::size_t len) {
-    const hsize_t dims[1] = {len};
-    Hid space(H5Screate_simple(1, dims, nullptr), H5Sclose);
-    Hid dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
-    if (compression != Hdf5Compression::kNone) {
-      const hsize_t chunk[1] = {std::clamp<hsize_t>(len, 1, hsize_t{1} << 16)};
-      H5Pset_chunk(dcpl.get(), 1, chunk);
-      if (compression == Hdf5Compression::kGzip) {
-        H5Pset_shuffle(dcpl.get());  // groups the similar high bytes: much better ratios
-        H5Pset_deflate(dcpl.get(), 1);
-      } else {
-        // Slots 0-3 are filled in by the filter; then level 5, byte shuffle, compressor lz4.
-        const unsigned cd[7] = {0, 0, 0, 0, 5, 1, 1};
-        H5Pset_filter(dcpl.get(), kBloscFilter, H5Z_FLAG_MANDATORY, 7, cd);
-      }
-    }
-    Hid ds(H5Dcreate2(file.get(), name, ftype, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-           H5Dclose);
-    if (!ds.valid() ||
-        (len > 0 && H5Dwrite(ds.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)) {
-      failH5(path, std::string("cannot write ") + name);
-    }
-  };
-  write("events/t", H5T_STD_I64LE, H5T_NATIVE_INT64, t_us.data(), n);
-  write("events/x", H5T_STD_U16LE, H5T_NATIVE_UINT16, events.x.data(), n);
-  write("events/y", H5T_STD_U16LE, H5T_NATIVE_UINT16, events.y.data(), n);
-  write("events/p", H5T_STD_U8LE, H5T_NATIVE_UINT8, p01.data(), n);
-  write("ms_to_idx", H5T_STD_U64LE, H5T_NATIVE_UINT64, ms_to_idx.data(), ms_to_idx.size());
-
-  Hid scalar(H5Screate(H5S_SCALAR), H5Sclose);
-  Hid ds(H5Dcreate2(file.get(), "t_offset", H5T_STD_I64LE, scalar.get(), H5P_DEFAULT, H5P_DEFAULT,
-                    H5P_DEFAULT),
-         H5Dclose);
-  if (!ds.valid() ||
-      H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &t_offset_us) < 0) {
-    failH5(path, "cannot write t_offset");
-  }
-  ds.reset();
-  if (H5Fflush(file.get(), H5F_SCOPE_LOCAL) < 0) failH5(path, "cannot flush");
-  return compression;
 }
 
 }  // namespace eds
