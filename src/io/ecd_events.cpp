@@ -43,38 +43,44 @@ std::size_t EcdEventSource::read(EventArray& out, std::size_t max_events) {
     };
     while (n < max_events && p < block_end) {
       line = p;
-      const char* end = static_cast<const char*>(std::memchr(p, '\n', block_end - p));
-      if (!end) end = block_end;
-      // Fast path: the common "t x y p" line with single spaces.
-      p = text::skipSpaces(p, end);
-      if (p == end || *p == '#') {  // blank or comment line
-        p = end + (end < block_end);
-        ++lines;
-        continue;
-      }
       TimeNs t;
       std::int32_t x, y;
-      const char* q = text::parseSecondsNs(p, end, t);
-      if (!q || !text::atFieldEnd(q, end)) fail(*p == '-' ? "negative timestamp" : "malformed timestamp");
-      q = text::skipSpaces(q, end);
-      const char* r = text::parseUint(q, end, x);
-      if (!r || !text::atFieldEnd(r, end)) fail(q == end ? "missing x (expected 't x y p')" : "malformed x");
-      q = text::skipSpaces(r, end);
-      r = text::parseUint(q, end, y);
-      if (!r || !text::atFieldEnd(r, end)) fail(q == end ? "missing y (expected 't x y p')" : "malformed y");
-      q = text::skipSpaces(r, end);
       std::int8_t pol = 0;
-      if (q < end && *q == '1') {
-        pol = 1, ++q;
-      } else if (q < end && *q == '0') {
-        pol = -1, ++q;
-      } else if (q + 1 < end && (*q == '-' || *q == '+') && q[1] == '1') {
-        pol = *q == '-' ? -1 : 1, q += 2;
+      const char* fast = block_end - p >= 48 ? text::parseEcdLineFast(p, t, x, y, pol) : nullptr;
+      if (fast) {
+        p = fast;
       } else {
-        fail(q == end ? "missing polarity (expected 't x y p')" : "polarity must be 0/1 or -1/+1");
+        // General path: any spacing, comments, +-1 polarity, and every error message.
+        const char* end = static_cast<const char*>(std::memchr(p, '\n', block_end - p));
+        if (!end) end = block_end;
+        p = text::skipSpaces(p, end);
+        if (p == end || *p == '#') {  // blank or comment line
+          p = end + (end < block_end);
+          ++lines;
+          continue;
+        }
+        const char* q = text::parseSecondsNs(p, end, t);
+        if (!q || !text::atFieldEnd(q, end)) fail(*p == '-' ? "negative timestamp" : "malformed timestamp");
+        q = text::skipSpaces(q, end);
+        const char* r = text::parseUint(q, end, x);
+        if (!r || !text::atFieldEnd(r, end)) fail(q == end ? "missing x (expected 't x y p')" : "malformed x");
+        q = text::skipSpaces(r, end);
+        r = text::parseUint(q, end, y);
+        if (!r || !text::atFieldEnd(r, end)) fail(q == end ? "missing y (expected 't x y p')" : "malformed y");
+        q = text::skipSpaces(r, end);
+        if (q < end && *q == '1') {
+          pol = 1, ++q;
+        } else if (q < end && *q == '0') {
+          pol = -1, ++q;
+        } else if (q + 1 < end && (*q == '-' || *q == '+') && q[1] == '1') {
+          pol = *q == '-' ? -1 : 1, q += 2;
+        } else {
+          fail(q == end ? "missing polarity (expected 't x y p')" : "polarity must be 0/1 or -1/+1");
+        }
+        if (!text::atFieldEnd(q, end)) fail("polarity must be 0/1 or -1/+1");
+        if (text::skipSpaces(q, end) != end) fail("more than 4 fields (expected 't x y p')");
+        p = end + (end < block_end);
       }
-      if (!text::atFieldEnd(q, end)) fail("polarity must be 0/1 or -1/+1");
-      if (text::skipSpaces(q, end) != end) fail("more than 4 fields (expected 't x y p')");
       if ((opts_.width > 0 && x >= opts_.width) || (opts_.height > 0 && y >= opts_.height))
         fail("pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") outside the " +
              std::to_string(opts_.width) + "x" + std::to_string(opts_.height) + " sensor");
@@ -87,7 +93,6 @@ std::size_t EcdEventSource::read(EventArray& out, std::size_t max_events) {
       ps[n] = pol;
       ++n;
       ++lines;
-      p = end + (end < block_end);
     }
     reader_->consume(static_cast<std::size_t>(p - block.data()), lines);
   }

@@ -117,6 +117,17 @@ TEST_F(BadInput, TruncatedGzip) {
   }
 }
 
+TEST_F(BadInput, ErrorDeepInALongFileNamesTheRightLine) {
+  // Long canonical files go through the fast parser; a bad line must still be found and named.
+  std::string content;
+  for (int i = 0; i < 5000; ++i) content += "0." + std::to_string(100000000 + i) + " 12 34 1\n";
+  content += "0.200000000 12 34 2\n";
+  for (int i = 0; i < 100; ++i) content += "0.3 1 2 0\n";
+  expectEventsError(write("events.txt", content), 5001, "polarity must be 0/1 or -1/+1");
+  content.replace(content.find("0.200000000 12 34 2"), 19, "0.200000000 12 3x 1");
+  expectEventsError(write("events.txt", content), 5001, "malformed y");
+}
+
 // --- calib.txt ---
 TEST_F(BadInput, CalibWithNaN) {
   const auto f = write("calib.txt", "200 200 120 90 nan 0 0 0 0\n");
