@@ -1,0 +1,223 @@
+#include "frontend/event_tracker.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace eds {
+
+void EventTrackerConfig::validate() const {
+  if (max_iterations < 1) throw std::invalid_argument("event tracker: max_iterations must be >= 1");
+  if (!(huber_initial > 0)) throw std::invalid_argument("event tracker: huber_initial must be > 0");
+  if (min_points < 6) throw std::invalid_argument("event tracker: min_points must be >= 6");
+}
+
+EventTracker::EventTracker(const CameraModel& pinhole, EventTrackerConfig cfg)
+    : cam_(pinhole), cfg_(cfg), huber_(cfg.huber_initial) {
+  cfg_.validate();
+  if (cam_.distortion != Distortion::kNone)
+    throw std::invalid_argument("event tracker: works on the undistorted pinhole camera");
+}
+
+void EventTracker::setKeyframe(const Keyframe& kf) {
+  p_kf_.clear();
+  a_.clear();
+  px_kf_.clear();
+  for (const KeyframePoint& p : kf.points) {
+    if (!(p.inv_depth > 0) || !std::isfinite(p.inv_depth)) continue;
+    const double x = (p.u - cam_.cx) / cam_.fx, y = (p.v - cam_.cy) / cam_.fy;
+    const double z = 1.0 / p.inv_depth;
+    p_kf_.emplace_back(x * z, y * z, z);
+    a_.push_back(egmRow(cam_, p.u, p.v, p.gx, p.gy, p.inv_depth));
+    px_kf_.emplace_back(p.u, p.v);
+  }
+  if (p_kf_.empty())
+    throw std::invalid_argument("event tracker: keyframe " + std::to_string(kf.id) +
+                                " has no point with a depth (" + std::to_string(kf.points.size()) + " points)");
+  const auto n = static_cast<Eigen::Index>(p_kf_.size());
+  idx_.reserve(n);
+  m_.resize(n);
+  mh_.resize(n);
+  D_.resize(n, 6);
+  A_.resize(n, 6);
+}
+
+int EventTracker::pointsInView(const SE3& T_ef_kf, int width, int height) const {
+  int n = 0;
+  for (const Vec3& p : p_kf_) {
+    const Vec3 q = T_ef_kf * p;
+    if (q.z() <= 1e-6) continue;
+    const Vec2 u(cam_.fx * q.x() / q.z() + cam_.cx, cam_.fy * q.y() / q.z() + cam_.cy);
+    n += u.x() >= cfg_.border && u.y() >= cfg_.border && u.x() <= width - 1 - cfg_.border &&
+         u.y() <= height - 1 - cfg_.border;
+  }
+  return n;
+}
+
+int EventTracker::evaluate(const cv::Mat& delta, const SE3& T_ef_kf, const Vec6& nu, Eigen::VectorXd& r,
+                           Eigen::MatrixXd* J) const {
+  const int W = delta.cols, H = delta.rows;
+  const Mat3 R = T_ef_kf.rotationMatrix();
+  const Vec3 t = T_ef_kf.translation();
+  idx_.clear();
+  Eigen::Index k = 0;
+  for (std::size_t i = 0; i < p_kf_.size(); ++i) {
+    const Vec3 q = R * p_kf_[i] + t;
+    if (q.z() <= 1e-6) continue;
+    const double iz = 1.0 / q.z();
+    const double ux = cam_.fx * q.x() * iz + cam_.cx, uy = cam_.fy * q.y() * iz + cam_.cy;
+    if (!(ux >= cfg_.border && uy >= cfg_.border && ux <= W - 1 - cfg_.border && uy <= H - 1 - cfg_.border))
+      continue;
+    double gx, gy;
+    m_[k] = sampleBicubic(delta, ux, uy, &gx, &gy);
+    if (J) {
+      // d(u)/d(q) then d(q)/d(ξ) = [I, -[q]x] for the left perturbation exp(ξ) T.
+      const double dux_dqx = cam_.fx * iz, dux_dqz = -cam_.fx * q.x() * iz * iz;
+      const double duy_dqy = cam_.fy * iz, duy_dqz = -cam_.fy * q.y() * iz * iz;
+      const Vec3 dm_dq(gx * dux_dqx, gy * duy_dqy, gx * dux_dqz + gy * duy_dqz);
+      D_.row(k).head<3>() = dm_dq.transpose();
+      D_.row(k).tail<3>() = q.cross(dm_dq).transpose();  // -dm_dq^T [q]x = (q x dm_dq)^T
+      A_.row(k) = a_[i];
+    }
+    mh_[k] = a_[i].dot(nu);
+    idx_.push_back(static_cast<int>(i));
+    ++k;
+  }
+  const Eigen::Index n = k;
+  r.resize(n);
+  if (n == 0) return 0;
+  const double s = m_.head(n).norm(), sh = mh_.head(n).norm();
+  if (!(s > 0) || !(sh > 0)) {
+    r.setZero();
+    if (J) J->setZero(n, 12);
+    return static_cast<int>(n);
+  }
+  r = mh_.head(n) / sh - m_.head(n) / s;
+  if (J) {
+    // r = n̂(ν) − n(ξ): dn/dξ = (D − n nᵀD)/s, dn̂/dν = (A − n̂ n̂ᵀA)/ŝ.
+    const Eigen::VectorXd nn = m_.head(n) / s, nh = mh_.head(n) / sh;
+    J->resize(n, 12);
+    const Row6 nD = nn.transpose() * D_.topRows(n);
+    const Row6 nA = nh.transpose() * A_.topRows(n);
+    J->leftCols<6>() = -(D_.topRows(n) - nn * nD) / s;
+    J->rightCols<6>() = (A_.topRows(n) - nh * nA) / sh;
+  }
+  return static_cast<int>(n);
+}
+
+namespace {
+double huberCost(const Eigen::VectorXd& r, double d) {
+  double c = 0;
+  for (Eigen::Index i = 0; i < r.size(); ++i) {
+    const double a = std::abs(r[i]);
+    c += a <= d ? 0.5 * a * a : d * (a - 0.5 * d);
+  }
+  return c;
+}
+}  // namespace
+
+TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu) {
+  TrackResult res;
+  if (p_kf_.empty()) throw std::logic_error("EventTracker::track before setKeyframe");
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
+  int n = evaluate(ef.delta, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
+  if (n < cfg_.min_points) {
+    res.points_in_view = n;
+    res.failure = "only " + std::to_string(n) + " points in view";
+    return res;
+  }
+  if (!(nu.norm() > 0)) {
+    // ν from linear least squares A ν ≈ m at the initial pose: the best-aligned prediction.
+    const Eigen::MatrixXd A = A_.topRows(n);
+    const Eigen::Matrix<double, 6, 6> AtA = A.transpose() * A + 1e-9 * Mat6::Identity();
+    nu = AtA.ldlt().solve(A.transpose() * m_.head(n));
+    if (!(nu.norm() > 0)) nu = Vec6::Unit(0);
+    nu.normalize();
+    n = evaluate(ef.delta, T_ef_kf, nu, r, &J);
+  }
+  double lambda = cfg_.lambda_initial;
+  const double d = huber_;
+  double cost = huberCost(r, d);
+  int it = 0;
+  for (; it < cfg_.max_iterations; ++it) {
+    Eigen::Matrix<double, 12, 12> H = Eigen::Matrix<double, 12, 12>::Zero();
+    Eigen::Matrix<double, 12, 1> g = Eigen::Matrix<double, 12, 1>::Zero();
+    for (Eigen::Index i = 0; i < r.size(); ++i) {
+      const double a = std::abs(r[i]);
+      const double w = a <= d ? 1.0 : d / a;  // IRLS weight of the Huber norm
+      const Eigen::Matrix<double, 1, 12> Ji = J.row(i);
+      H.selfadjointView<Eigen::Upper>().rankUpdate(Ji.transpose(), w);
+      g += w * r[i] * Ji.transpose();
+    }
+    H.triangularView<Eigen::Lower>() = H.transpose();
+    bool improved = false;
+    for (int tries = 0; tries < 6 && !improved; ++tries) {
+      Eigen::Matrix<double, 12, 12> Hd = H;
+      Hd.diagonal() += lambda * H.diagonal() + Eigen::Matrix<double, 12, 1>::Constant(1e-12);
+      const Eigen::Matrix<double, 12, 1> delta = -Hd.ldlt().solve(g);
+      if (!delta.allFinite()) break;
+      const SE3 T_new = SE3::exp(delta.head<6>()) * T_ef_kf;
+      Vec6 nu_new = nu + delta.tail<6>();
+      nu_new.normalize();
+      Eigen::VectorXd r_new;
+      Eigen::MatrixXd J_new;
+      const int n_new = evaluate(ef.delta, T_new, nu_new, r_new, &J_new);
+      const double cost_new = n_new >= cfg_.min_points ? huberCost(r_new, d) : 1e300;
+      if (cost_new < cost) {
+        const double gain = cost - cost_new;
+        T_ef_kf = T_new;
+        nu = nu_new;
+        r = std::move(r_new);
+        J = std::move(J_new);
+        n = n_new;
+        cost = cost_new;
+        lambda = std::max(1e-7, lambda * 0.3);
+        improved = true;
+        if (gain < 1e-10 * (1 + cost) || delta.head<6>().norm() < 1e-8) it = cfg_.max_iterations;
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved) break;
+  }
+  res.iterations = std::min(it + 1, cfg_.max_iterations);
+  res.points_in_view = n;
+  res.cost = cost;
+  // Correlation of the normalized vectors: 1 - |r|^2 / 2.
+  res.correlation = 1.0 - 0.5 * r.squaredNorm();
+  if (cfg_.adapt_huber && r.size() > 0) {
+    std::vector<double> v(r.data(), r.data() + r.size());
+    auto mid = v.begin() + v.size() / 2;
+    std::nth_element(v.begin(), mid, v.end());
+    const double med = *mid;
+    for (double& x : v) x = std::abs(x - med);
+    std::nth_element(v.begin(), mid, v.end());
+    const double mad = *mid;
+    if (mad > 0) huber_ = 1.345 * 1.4826 * mad;
+  }
+  if (!T_ef_kf.translation().allFinite() || !nu.allFinite()) {
+    res.failure = "solver diverged (non-finite state)";
+  } else if (res.correlation < cfg_.min_correlation) {
+    res.failure = "prediction does not explain the events (correlation " + std::to_string(res.correlation) + ")";
+  } else {
+    res.ok = true;
+  }
+  return res;
+}
+
+cv::Mat EventTracker::predictedImage(const Vec6& nu, int width, int height) const {
+  cv::Mat img(height, width, CV_32F, cv::Scalar(0));
+  double s = 0;
+  for (const Row6& a : a_) s += std::pow(a.dot(nu), 2);
+  s = std::sqrt(s);
+  if (!(s > 0)) return img;
+  for (std::size_t i = 0; i < a_.size(); ++i) {
+    const int x = static_cast<int>(std::lround(px_kf_[i].x)), y = static_cast<int>(std::lround(px_kf_[i].y));
+    if (x >= 0 && y >= 0 && x < width && y < height) img.at<float>(y, x) = static_cast<float>(a_[i].dot(nu) / s);
+  }
+  return img;
+}
+
+}  // namespace eds
