@@ -12,11 +12,16 @@ int main(int argc, char** argv) {
   // Subcommands (one file each under apps/).
   eds::app::addInfoCommand(app);
   eds::app::addEvalCommand(app);
+  eds::app::addSimulateCommand(app);
+  eds::app::addTrackCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const eds::InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::invalid_argument& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {

@@ -1,0 +1,42 @@
+#pragma once
+// Writes a simulated sequence in the ECD folder layout (what io/sequence.hpp reads): events.txt or
+// events.txt.gz, images.txt + images/, depth/ (uint16 mm), calib.txt, groundtruth.txt.
+#include <cstdio>
+#include <filesystem>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "sim/simulator.hpp"
+
+namespace eds::sim {
+
+class EcdWriter : public SimSink {
+ public:
+  // Creates `dir` (and images/, depth/). Throws InputError if it cannot.
+  EcdWriter(const std::filesystem::path& dir, bool gzip, bool write_depth);
+  ~EcdWriter() override;
+  void onEvents(const EventArray& events) override;
+  void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) override;
+  // Flushes and closes the event file and images.txt; call once at the end.
+  void finish();
+
+ private:
+  void flushText();
+  std::filesystem::path dir_;
+  bool write_depth_;
+  std::FILE* events_ = nullptr;
+  void* gz_ = nullptr;
+  std::FILE* images_ = nullptr;
+  std::vector<char> text_;
+  std::size_t frame_index_ = 0;
+};
+
+// calib.txt: `fx fy cx cy k1 k2 p1 p2 k3` (radtan or none only: the ECD line has no other model).
+void writeEcdCalib(const std::filesystem::path& file, const CameraModel& camera);
+// camchain.yaml (Kalibr) for any model, with resolution: what io/sequence.hpp prefers to calib.txt.
+void writeKalibrCamchain(const std::filesystem::path& file, const CameraModel& camera);
+// groundtruth.txt at `rate_hz` over [t0, t1] from the motion.
+void writeGroundTruth(const std::filesystem::path& file, const Motion& motion, TimeNs t0, TimeNs t1,
+                      double rate_hz);
+
+}  // namespace eds::sim
