@@ -1,0 +1,281 @@
+#include "system/track_only.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
+#include "core/error.hpp"
+#include "core/undistorter.hpp"
+
+namespace eds {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// Hands out packets of N events every `stride` events from a streaming source, keeping only a
+// bounded window of events in memory.
+class PacketStream {
+ public:
+  PacketStream(EventSource& src, std::size_t n, std::size_t stride) : src_(src), n_(n), stride_(stride) {}
+  bool next(const EventArray*& events, std::size_t& begin) {
+    while (buf_.size() < pos_ + n_) {
+      if (pos_ > (1u << 20)) compact();
+      if (src_.read(buf_, 1 << 18) == 0) return false;
+    }
+    events = &buf_;
+    begin = pos_;
+    pos_ += stride_;
+    return true;
+  }
+
+ private:
+  void compact() {
+    const auto d = static_cast<std::ptrdiff_t>(pos_);
+    buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
+    buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
+    buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
+    buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
+    pos_ = 0;
+  }
+  EventSource& src_;
+  std::size_t n_, stride_, pos_ = 0;
+  EventArray buf_;
+};
+
+// Pose at time t from a trajectory sorted by time: interpolated inside, the nearest end outside.
+SE3 poseAt(const Trajectory& traj, TimeNs t) {
+  if (traj.empty()) throw std::logic_error("poseAt on an empty trajectory");
+  if (t <= traj.front().t) return traj.front().T_w_c;
+  if (t >= traj.back().t) return traj.back().T_w_c;
+  const auto it = std::lower_bound(traj.begin(), traj.end(), t,
+                                   [](const StampedPose& s, TimeNs tt) { return s.t < tt; });
+  const StampedPose& b = *it;
+  const StampedPose& a = *(it - 1);
+  return interpolate(a.T_w_c, b.T_w_c, static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t));
+}
+
+cv::Mat toGray8(const cv::Mat& f) {
+  double m = 0;
+  cv::minMaxLoc(cv::abs(f), nullptr, &m);
+  cv::Mat out;
+  f.convertTo(out, CV_8U, m > 0 ? 127.0 / m : 1.0, 128.0);
+  return out;
+}
+
+struct KeyframeBuilder {
+  const Sequence& seq;
+  const Undistorter& und;
+  const TrackOnlyConfig& cfg;
+  std::mt19937_64 rng;
+
+  Keyframe make(int id, std::size_t frame, const SE3& T_w_kf) {
+    Keyframe kf;
+    kf.id = id;
+    kf.t = seq.frames()[frame].t;
+    kf.T_w_kf = T_w_kf;
+    setKeyframeImage(kf, und.undistortImage(seq.loadFrame(frame)), cfg.keyframe_image);
+    const std::vector<cv::Point> pts = selectPoints(kf.grad_x, kf.grad_y, cfg.points);
+    if (pts.empty())
+      throw std::runtime_error("no points selected in frame " + seq.frames()[frame].path.string() +
+                               " (flat image? lower --min-gradient)");
+    const auto depth = seq.loadDepth(frame);
+    if (!depth)
+      throw InputError((seq.dir() / "depth" / seq.frames()[frame].path.filename()).string(),
+                       "depth map not found: --depth-from-gt needs the sequence's depth/ maps");
+    std::vector<double> zs;
+    for (const cv::Point& p : pts) {
+      // Depth maps are on the raw (distorted) grid; z is the same in the undistorted camera.
+      const int xr = static_cast<int>(std::lround(und.mapX().at<float>(p.y, p.x)));
+      const int yr = static_cast<int>(std::lround(und.mapY().at<float>(p.y, p.x)));
+      double z = 0;
+      if (xr >= 0 && yr >= 0 && xr < depth->cols && yr < depth->rows) z = depth->at<float>(yr, xr);
+      KeyframePoint kp;
+      kp.u = static_cast<float>(p.x);
+      kp.v = static_cast<float>(p.y);
+      kp.gx = kf.grad_x.at<float>(p.y, p.x);
+      kp.gy = kf.grad_y.at<float>(p.y, p.x);
+      kp.inv_depth = z > 0 ? 1.0 / z : 0.0;
+      if (z > 0) zs.push_back(z);
+      kf.points.push_back(kp);
+    }
+    if (zs.empty())
+      throw InputError((seq.dir() / "depth" / seq.frames()[frame].path.filename()).string(),
+                       "no selected point has a depth");
+    std::nth_element(zs.begin(), zs.begin() + zs.size() / 2, zs.end());
+    const double median = zs[zs.size() / 2];
+    if (cfg.depth_noise > 0) {
+      std::normal_distribution<double> noise(0.0, cfg.depth_noise * median);
+      for (KeyframePoint& kp : kf.points)
+        if (kp.inv_depth > 0) kp.inv_depth = 1.0 / std::max(0.05 * median, 1.0 / kp.inv_depth + noise(rng));
+    }
+    return kf;
+  }
+};
+
+double medianDepth(const Keyframe& kf) {
+  std::vector<double> z;
+  for (const auto& p : kf.points)
+    if (p.inv_depth > 0) z.push_back(1.0 / p.inv_depth);
+  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+  return z[z.size() / 2];
+}
+
+}  // namespace
+
+TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
+  const auto wall0 = Clock::now();
+  cfg.event_frame.validate();
+  cfg.points.validate();
+  if (!seq.hasFrames()) throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
+  const Trajectory gt = seq.groundTruth();
+  if (gt.empty()) throw InputError((seq.dir() / "groundtruth.txt").string(), "empty ground truth");
+  const Undistorter und(seq.camera());
+  const CameraModel& cam = und.pinhole();
+  EventTracker tracker(cam, cfg.tracker);
+  KeyframeBuilder builder{seq, und, cfg, std::mt19937_64(cfg.seed)};
+  EventFrameBuilder ef_builder(und, cfg.event_frame);
+
+  TrackOnlyResult res;
+  const auto& frames = seq.frames();
+  std::size_t kf_frame = 0;
+  Keyframe kf = builder.make(0, 0, poseAt(gt, frames[0].t));
+  tracker.setKeyframe(kf);
+  double kf_median_depth = medianDepth(kf);
+  int kf_in_view = tracker.pointsInView(SE3(), cam.width, cam.height);
+  res.keyframes = 1;
+  res.points_per_keyframe.push_back(static_cast<int>(tracker.numPoints()));
+  res.trajectory.push_back({kf.t, kf.T_w_kf});
+  const TimeNs t_end = cfg.duration_s > 0 ? frames[0].t + fromSeconds(cfg.duration_s)
+                                          : std::numeric_limits<TimeNs>::max();
+
+  auto src = seq.openEvents();
+  PacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events), cfg.event_frame.stride());
+  const EventArray* events = nullptr;
+  std::size_t begin = 0;
+  EventFrame ef;
+  SE3 T_ef_kf;        // current estimate
+  Vec6 nu = Vec6::Zero();
+  // The last two tracked poses on this keyframe, for the constant-velocity prediction.
+  SE3 T_prev;
+  TimeNs t_prev = -1, t_last = -1;
+  bool need_keyframe = false, lost = false;
+  TimeNs first_ef_t = -1, last_ef_t = -1;
+
+  while (packets.next(events, begin)) {
+    const auto tb = Clock::now();
+    ef_builder.build(*events, begin, ef);
+    if (ef.t < frames[0].t) continue;
+    if (ef.t > t_end) break;
+    res.build_ms.push_back(msSince(tb));
+    ++res.event_frames;
+    if (first_ef_t < 0) first_ef_t = ef.t;
+    last_ef_t = ef.t;
+
+    if (need_keyframe) {
+      // The newest frame not after this event frame (and newer than the keyframe's).
+      std::size_t f = kf_frame;
+      while (f + 1 < frames.size() && frames[f + 1].t <= ef.t) ++f;
+      if (f != kf_frame) {
+        const SE3 T_w_kf_new = poseAt(res.trajectory, frames[f].t);
+        const SE3 T_w_ef = kf.T_w_kf * T_ef_kf.inverse();
+        const SE3 T_kfnew_kfold = T_w_kf_new.inverse() * kf.T_w_kf;
+        kf = builder.make(static_cast<int>(res.keyframes), f, T_w_kf_new);
+        tracker.setKeyframe(kf);
+        kf_frame = f;
+        kf_median_depth = medianDepth(kf);
+        kf_in_view = tracker.pointsInView(SE3(), cam.width, cam.height);
+        ++res.keyframes;
+        res.points_per_keyframe.push_back(static_cast<int>(tracker.numPoints()));
+        T_ef_kf = T_w_ef.inverse() * T_w_kf_new;
+        // ν is a twist in the keyframe's frame: rotate it into the new one.
+        const Mat3 R = T_kfnew_kfold.rotationMatrix();
+        nu.head<3>() = R * nu.head<3>();
+        nu.tail<3>() = R * nu.tail<3>();
+        if (lost) nu.setZero();
+        t_prev = t_last = -1;
+        need_keyframe = lost = false;
+      }
+    }
+
+    // Constant-velocity prediction from the last two event frames on this keyframe.
+    SE3 T_init = T_ef_kf;
+    if (t_prev >= 0 && t_last > t_prev) {
+      const double alpha = static_cast<double>(ef.t - t_last) / static_cast<double>(t_last - t_prev);
+      const SE3 T_step = T_ef_kf * T_prev.inverse();  // previous -> last event frame
+      T_init = SE3::exp(std::clamp(alpha, 0.0, 3.0) * T_step.log()) * T_ef_kf;
+    }
+    const auto tt = Clock::now();
+    SE3 T_est = T_init;
+    Vec6 nu_est = nu;
+    const TrackResult tr = tracker.track(ef, T_est, nu_est);
+    res.track_ms.push_back(msSince(tt));
+    if (!cfg.debug_dir.empty()) {
+      cv::Mat both;
+      cv::hconcat(toGray8(ef.delta), toGray8(tracker.predictedImage(nu_est, cam.width, cam.height)), both);
+      char name[64];
+      std::snprintf(name, sizeof name, "ef_%06zu.png", res.event_frames - 1);
+      cv::imwrite((cfg.debug_dir / name).string(), both);
+    }
+    if (!tr.ok) {
+      res.failures.push_back({ef.t, tr.failure});
+      need_keyframe = lost = true;  // go on from the next keyframe
+      continue;
+    }
+    ++res.tracked;
+    T_prev = T_ef_kf;
+    t_prev = t_last;
+    T_ef_kf = T_est;
+    nu = nu_est;
+    t_last = ef.t;
+    res.trajectory.push_back({ef.t, kf.T_w_kf * T_ef_kf.inverse()});
+    const bool drop = tr.points_in_view < (1.0 - cfg.policy.max_point_drop) * kf_in_view;
+    const bool rotated = T_ef_kf.so3().angle() > cfg.policy.max_rotation_deg * M_PI / 180.0;
+    const bool moved = T_ef_kf.translation().norm() > cfg.policy.max_translation_ratio * kf_median_depth;
+    need_keyframe = drop || rotated || moved;
+  }
+  if (res.event_frames == 0)
+    throw InputError(seq.eventsFile().string(), "no event frame after the first frame (too few events?)");
+  res.sequence_s = toSeconds(last_ef_t - frames[0].t);
+  res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();
+  return res;
+}
+
+namespace {
+nlohmann::json stats(std::vector<double> v) {
+  if (v.empty()) return nullptr;
+  std::sort(v.begin(), v.end());
+  const auto pct = [&](double q) { return v[std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5))]; };
+  double sum = 0;
+  for (double x : v) sum += x;
+  return {{"median", pct(0.5)}, {"p95", pct(0.95)}, {"mean", sum / v.size()}, {"max", v.back()}};
+}
+}  // namespace
+
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r, const TrackOnlyConfig& cfg) {
+  nlohmann::json j;
+  j["mode"] = "track --depth-from-gt";
+  j["counts"] = {{"event_frames", r.event_frames}, {"tracked", r.tracked}, {"failures", r.failures.size()},
+                 {"keyframes", r.keyframes}, {"poses", r.trajectory.size()}};
+  j["points_per_keyframe"] = r.points_per_keyframe;
+  j["timings_ms"] = {{"event_frame_build", stats(r.build_ms)}, {"track", stats(r.track_ms)}};
+  j["wall_s"] = r.wall_s;
+  j["sequence_s"] = r.sequence_s;
+  j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;
+  nlohmann::json fails = nlohmann::json::array();
+  for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
+  j["failures"] = fails;
+  j["config"] = {{"events_per_frame", cfg.event_frame.num_events}, {"overlap", cfg.event_frame.overlap},
+                 {"tile", cfg.points.tile}, {"point_fraction", cfg.points.fraction},
+                 {"max_points", cfg.points.max_points}, {"depth_noise", cfg.depth_noise}, {"seed", cfg.seed}};
+  std::ofstream out(file);
+  if (!out) throw InputError(file.string(), "cannot open for writing");
+  out << j.dump(2) << "\n";
+}
+
+}  // namespace eds

@@ -1,0 +1,55 @@
+#pragma once
+// Tracking-only mode (for studies and tests): keyframes come from the sequence's frames with the TRUE
+// depth of their depth maps (optionally perturbed), and the event tracker tracks every event frame
+// against the current keyframe. The first keyframe takes its ground-truth pose; every later one takes
+// the pose the tracker estimated at its frame's time, so errors accumulate as in the full system.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "frontend/event_frame.hpp"
+#include "frontend/event_tracker.hpp"
+#include "frontend/point_selection.hpp"
+#include "io/sequence.hpp"
+
+namespace eds {
+
+struct KeyframePolicyConfig {
+  double max_point_drop = 0.25;      // new keyframe when points in view fall by this fraction
+  double max_rotation_deg = 10.0;    // ... or the rotation from the keyframe exceeds this
+  double max_translation_ratio = 0.15;  // ... or translation / median scene depth exceeds this
+};
+
+struct TrackOnlyConfig {
+  EventFrameConfig event_frame;
+  EventTrackerConfig tracker;
+  PointSelectionConfig points;
+  KeyframeImageConfig keyframe_image;
+  KeyframePolicyConfig policy;
+  double depth_noise = 0.0;      // sigma of additive depth noise, as a fraction of the median depth
+  std::uint64_t seed = 1;
+  double duration_s = 0.0;       // 0 = the whole sequence (from the first frame)
+  std::filesystem::path debug_dir;  // non-empty: write event frame | prediction PNGs there
+};
+
+struct TrackFailure {
+  TimeNs t = 0;
+  std::string reason;
+};
+
+struct TrackOnlyResult {
+  Trajectory trajectory;  // first keyframe's pose, then one pose per tracked event frame (T_w_ef)
+  std::size_t event_frames = 0, tracked = 0, keyframes = 0;
+  std::vector<TrackFailure> failures;
+  std::vector<double> build_ms, track_ms;  // per event frame
+  std::vector<int> points_per_keyframe;
+  double wall_s = 0;
+  double sequence_s = 0;  // span of the event frames processed
+};
+
+TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg);
+
+// summary.json of a run (counts, timings with median/p95, failures, real-time factor).
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r, const TrackOnlyConfig& cfg);
+
+}  // namespace eds
