@@ -54,7 +54,10 @@ void addTrackCommand(CLI::App& app) {
   cmd->add_option("--seed", a->cfg.seed, "Seed of the depth noise")->capture_default_str();
   cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process from the first frame (0: all)")->capture_default_str();
   cmd->add_option("--kf-rotation", a->cfg.policy.max_rotation_deg, "New keyframe above this rotation, deg")->capture_default_str();
+  cmd->add_option("--kf-translation", a->cfg.policy.max_translation_ratio, "New keyframe above this translation / median depth")->capture_default_str();
   cmd->add_option("--kf-point-drop", a->cfg.policy.max_point_drop, "New keyframe when this fraction of points left view")->capture_default_str();
+  cmd->add_flag("!--no-frame-refine", a->cfg.refine_keyframes,
+                "Keyframe poses from events only (default: refined by aligning the frame to the previous keyframe)");
   cmd->add_flag("--debug-images", a->debug_images, "Write event frame | EGM prediction PNGs to OUT/debug");
   cmd->callback([a] { runTrack(*a); });
 }

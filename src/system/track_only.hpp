@@ -2,13 +2,15 @@
 // Tracking-only mode (for studies and tests): keyframes come from the sequence's frames with the TRUE
 // depth of their depth maps (optionally perturbed), and the event tracker tracks every event frame
 // against the current keyframe. The first keyframe takes its ground-truth pose; every later one takes
-// the pose the tracker estimated at its frame's time, so errors accumulate as in the full system.
+// the pose estimated at its frame's time (event pose, refined by aligning the frame to the previous
+// keyframe), so errors accumulate as in the full system.
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "frontend/event_frame.hpp"
 #include "frontend/event_tracker.hpp"
+#include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "io/sequence.hpp"
 
@@ -26,6 +28,10 @@ struct TrackOnlyConfig {
   PointSelectionConfig points;
   KeyframeImageConfig keyframe_image;
   KeyframePolicyConfig policy;
+  FrameTrackerConfig frame_tracker;
+  // A new keyframe's pose: the event pose at its frame's time, refined by aligning the frame to the
+  // previous keyframe (on by default; off = event poses only).
+  bool refine_keyframes = true;
   double depth_noise = 0.0;      // sigma of additive depth noise, as a fraction of the median depth
   std::uint64_t seed = 1;
   double duration_s = 0.0;       // 0 = the whole sequence (from the first frame)
@@ -42,6 +48,7 @@ struct TrackOnlyResult {
   std::size_t event_frames = 0, tracked = 0, keyframes = 0;
   std::vector<TrackFailure> failures;
   std::vector<double> build_ms, track_ms;  // per event frame
+  std::vector<double> frame_track_ms;      // per keyframe hand-over
   std::vector<int> points_per_keyframe;
   double wall_s = 0;
   double sequence_s = 0;  // span of the event frames processed

@@ -1,0 +1,163 @@
+#include "frontend/frame_tracker.hpp"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace eds {
+
+namespace {
+// DSO's residual pattern #8.
+constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
+}  // namespace
+
+FrameTracker::FrameTracker(const CameraModel& pinhole, FrameTrackerConfig cfg) : cam_(pinhole), cfg_(cfg) {
+  if (cfg_.levels < 1 || cfg_.levels > 6) throw std::invalid_argument("frame tracker: levels must be 1..6");
+  if (!(cfg_.huber > 0)) throw std::invalid_argument("frame tracker: huber must be > 0");
+}
+
+CameraModel FrameTracker::levelCamera(int level) const {
+  // Pixel centres at integers: x_l = (x + 0.5) / 2^l - 0.5.
+  const double s = 1.0 / (1 << level);
+  CameraModel c = cam_;
+  c.fx *= s, c.fy *= s;
+  c.cx = (cam_.cx + 0.5) * s - 0.5;
+  c.cy = (cam_.cy + 0.5) * s - 0.5;
+  c.width = cam_.width >> level, c.height = cam_.height >> level;
+  return c;
+}
+
+void FrameTracker::pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img, std::vector<cv::Mat>& gx,
+                           std::vector<cv::Mat>& gy) const {
+  img.resize(cfg_.levels);
+  gx.resize(cfg_.levels);
+  gy.resize(cfg_.levels);
+  img[0] = frame;
+  for (int l = 1; l < cfg_.levels; ++l) cv::resize(img[l - 1], img[l], cv::Size(img[l - 1].cols / 2, img[l - 1].rows / 2), 0, 0, cv::INTER_AREA);
+  for (int l = 0; l < cfg_.levels; ++l) {
+    cv::Sobel(img[l], gx[l], CV_32F, 1, 0, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+    cv::Sobel(img[l], gy[l], CV_32F, 0, 1, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  }
+}
+
+void FrameTracker::setKeyframe(const Keyframe& kf) {
+  std::vector<cv::Mat> img, gx, gy;
+  pyramid(kf.image, img, gx, gy);
+  points_.assign(cfg_.levels, {});
+  for (int l = 0; l < cfg_.levels; ++l) {
+    const CameraModel c = levelCamera(l);
+    const double s = 1.0 / (1 << l);
+    for (const KeyframePoint& p : kf.points) {
+      if (!(p.inv_depth > 0)) continue;
+      const double ul = (p.u + 0.5) * s - 0.5, vl = (p.v + 0.5) * s - 0.5;
+      // Coarse levels: one residual per point (the pattern would span several fine pixels' worth).
+      const int npat = l == 0 ? 8 : 1;
+      for (int k = 0; k < npat; ++k) {
+        const double u = ul + (npat == 8 ? kPattern[k][0] : 0), v = vl + (npat == 8 ? kPattern[k][1] : 0);
+        if (u < 0 || v < 0 || u >= c.width - 1 || v >= c.height - 1) continue;
+        const double z = 1.0 / p.inv_depth;
+        LevelPoint lp;
+        lp.p_kf = Vec3((u - c.cx) / c.fx * z, (v - c.cy) / c.fy * z, z);
+        lp.ref = sampleBilinear(img[l], u, v);
+        points_[l].push_back(lp);
+      }
+    }
+  }
+  if (points_[0].empty()) throw std::invalid_argument("frame tracker: keyframe has no point with depth");
+}
+
+int FrameTracker::evaluate(int level, const cv::Mat& img, const cv::Mat& gx, const cv::Mat& gy, const SE3& T,
+                           double alpha, double beta, std::vector<double>& r,
+                           std::vector<Eigen::Matrix<double, 1, 8>>* J) const {
+  const CameraModel c = levelCamera(level);
+  const Mat3 R = T.rotationMatrix();
+  const Vec3 t = T.translation();
+  r.clear();
+  if (J) J->clear();
+  for (const LevelPoint& lp : points_[level]) {
+    const Vec3 q = R * lp.p_kf + t;
+    if (q.z() <= 1e-6) continue;
+    const double iz = 1.0 / q.z();
+    const double u = c.fx * q.x() * iz + c.cx, v = c.fy * q.y() * iz + c.cy;
+    if (!(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
+    r.push_back(sampleBilinear(img, u, v) - (alpha * lp.ref + beta));
+    if (J) {
+      const double dx = sampleBilinear(gx, u, v), dy = sampleBilinear(gy, u, v);
+      const Vec3 dI_dq(dx * c.fx * iz, dy * c.fy * iz, -(dx * c.fx * q.x() + dy * c.fy * q.y()) * iz * iz);
+      Eigen::Matrix<double, 1, 8> row;
+      row.head<3>() = dI_dq.transpose();
+      row.segment<3>(3) = q.cross(dI_dq).transpose();
+      row(6) = -lp.ref;
+      row(7) = -1.0;
+      J->push_back(row);
+    }
+  }
+  return static_cast<int>(r.size());
+}
+
+FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha, double& beta) const {
+  if (points_.empty()) throw std::logic_error("FrameTracker::track before setKeyframe");
+  std::vector<cv::Mat> img, gx, gy;
+  pyramid(frame, img, gx, gy);
+  FrameTrackResult res;
+  std::vector<double> r, r_new;
+  std::vector<Eigen::Matrix<double, 1, 8>> J;
+  const int np = cfg_.affine ? 8 : 6;
+  const double d = cfg_.huber;
+  const auto cost = [d](const std::vector<double>& rr) {
+    double c = 0;
+    for (double x : rr) c += std::abs(x) <= d ? 0.5 * x * x : d * (std::abs(x) - 0.5 * d);
+    return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
+  };
+  for (int l = cfg_.levels - 1; l >= 0; --l) {
+    double lambda = 1e-3;
+    if (evaluate(l, img[l], gx[l], gy[l], T, alpha, beta, r, &J) < 6) continue;
+    double c0 = cost(r);
+    for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
+      Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
+      Eigen::Matrix<double, 8, 1> g = Eigen::Matrix<double, 8, 1>::Zero();
+      for (std::size_t i = 0; i < r.size(); ++i) {
+        const double w = std::abs(r[i]) <= d ? 1.0 : d / std::abs(r[i]);
+        H.noalias() += w * J[i].transpose() * J[i];
+        g.noalias() += w * r[i] * J[i].transpose();
+      }
+      bool improved = false;
+      for (int tries = 0; tries < 5 && !improved; ++tries) {
+        Eigen::MatrixXd Hs = H.topLeftCorner(np, np);
+        Hs.diagonal() *= 1.0 + lambda;
+        const Eigen::VectorXd delta = -Hs.ldlt().solve(g.head(np));
+        if (!delta.allFinite()) break;
+        const SE3 T_new = SE3::exp(delta.head<6>()) * T;
+        const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
+        std::vector<Eigen::Matrix<double, 1, 8>> J_new;
+        if (evaluate(l, img[l], gx[l], gy[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
+          lambda *= 10;
+          continue;
+        }
+        const double c1 = cost(r_new);
+        if (c1 < c0) {
+          T = T_new, alpha = a_new, beta = b_new;
+          r.swap(r_new);
+          J.swap(J_new);
+          const bool converged = c0 - c1 < 1e-8 * c0 || delta.head<6>().norm() < 1e-7;
+          c0 = c1;
+          lambda = std::max(1e-6, lambda * 0.3);
+          improved = !converged;
+          if (converged) it = cfg_.max_iterations;
+        } else {
+          lambda *= 10;
+        }
+      }
+      if (!improved) break;
+    }
+  }
+  double ss = 0;
+  for (double x : r) ss += std::min(x * x, d * d);
+  res.residuals = static_cast<int>(r.size());
+  res.rmse = r.empty() ? 1e9 : std::sqrt(ss / r.size());
+  res.ok = res.residuals >= cfg_.min_residuals && res.rmse <= cfg_.max_rmse && T.translation().allFinite();
+  return res;
+}
+
+}  // namespace eds

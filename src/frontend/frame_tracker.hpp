@@ -1,0 +1,68 @@
+#pragma once
+// FrameTracker: direct photometric alignment of a frame to a keyframe with known depth (DSO-style):
+// minimizes the Huber norm of I_f(π(T p)) − (α I_kf(u) + β) over T_f_kf and the affine brightness
+// (α, β), over DSO's 8-pixel pattern around each keyframe point, coarse-to-fine on an image pyramid,
+// from a given initial pose (the event tracker's, in EDS). Analytic Jacobians (checked by a test).
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/camera.hpp"
+#include "core/se3.hpp"
+#include "map/keyframe.hpp"
+
+namespace eds {
+
+struct FrameTrackerConfig {
+  int levels = 3;            // pyramid levels (each half the size of the previous)
+  int max_iterations = 15;   // per level
+  double huber = 9.0 / 255;  // intensity units (DSO: 9 gray levels)
+  bool affine = true;        // estimate α, β (off: brightness constancy)
+  double max_rmse = 0.08;    // above this at the finest level: reported as lost
+  int min_residuals = 100;
+};
+
+struct FrameTrackResult {
+  bool ok = false;
+  double rmse = 0;       // robust residual RMSE at the finest level, intensity units
+  int residuals = 0;     // in view at the finest level
+  int iterations = 0;
+};
+
+class FrameTracker {
+ public:
+  FrameTracker(const CameraModel& pinhole, FrameTrackerConfig cfg);
+  // Keyframe image pyramid and 3D points of its points with depth.
+  void setKeyframe(const Keyframe& kf);
+  // Refines T_f_kf (frame from keyframe) and α, β, from their initial values. `frame` is the
+  // undistorted image, CV_32F in [0, 1].
+  FrameTrackResult track(const cv::Mat& frame, SE3& T_f_kf, double& alpha, double& beta) const;
+
+  // For tests: residuals and Jacobian (columns ξ (6), α, β) at pyramid level `level`.
+  int evaluate(int level, const cv::Mat& frame_level, const cv::Mat& gx, const cv::Mat& gy, const SE3& T_f_kf,
+               double alpha, double beta, std::vector<double>& r, std::vector<Eigen::Matrix<double, 1, 8>>* J) const;
+  // Builds the image pyramid and per-level gradients of a frame (exposed for tests).
+  void pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img, std::vector<cv::Mat>& gx, std::vector<cv::Mat>& gy) const;
+
+ private:
+  struct LevelPoint {
+    Vec3 p_kf;       // pattern pixel's 3D point in the keyframe
+    float ref = 0;   // keyframe intensity at the pattern pixel
+  };
+  CameraModel levelCamera(int level) const;
+
+  CameraModel cam_;
+  FrameTrackerConfig cfg_;
+  std::vector<std::vector<LevelPoint>> points_;  // per level
+};
+
+// Bilinear sample (pixel centres at integers); the caller keeps (x, y) inside [0, w-1) x [0, h-1).
+inline float sampleBilinear(const cv::Mat& img, double x, double y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const float ax = static_cast<float>(x - x0), ay = static_cast<float>(y - y0);
+  const float* r0 = img.ptr<float>(y0) + x0;
+  const float* r1 = img.ptr<float>(y0 + 1) + x0;
+  return (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+}
+
+}  // namespace eds
