@@ -25,7 +25,8 @@
 namespace eds {
 
 struct EventTrackerConfig {
-  int max_iterations = 12;
+  int max_iterations = 12;     // per level
+  int levels = 3;              // coarse-to-fine: event frame blurred by 0, 1.5, 3 px
   double huber_initial = 0.1;  // on normalized residuals; then 1.345 * 1.4826 * MAD after each solve
   bool adapt_huber = true;
   double border = 2.0;         // px: bicubic sampling needs a margin
@@ -54,7 +55,8 @@ class EventTracker {
 
   // Refines T_ef_kf and nu (unit 6-vector) from their initial values. If nu is zero, it is
   // initialized by linear least squares given the initial pose.
-  TrackResult track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu);
+  // `levels` overrides the configured coarse-to-fine levels (a warm-started frame needs only 1).
+  TrackResult track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, int levels = 0);
 
   // Points of the keyframe that land inside the event frame at T_ef_kf.
   int pointsInView(const SE3& T_ef_kf, int width, int height) const;
@@ -75,7 +77,12 @@ class EventTracker {
   std::vector<Vec3> p_kf_;   // 3D points in the keyframe
   std::vector<Row6> a_;      // EGM rows
   std::vector<cv::Point2f> px_kf_;
+  // One Levenberg-Marquardt solve on one (blurred) event frame; returns the points in view.
+  int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, Eigen::VectorXd& r, Eigen::MatrixXd& J,
+                 double& cost, int& iterations) const;
+
   double huber_;
+  mutable cv::Mat blurred_;
   // Scratch (kept between frames: no allocation per frame once warm).
   mutable std::vector<int> idx_;
   mutable Eigen::VectorXd m_, mh_;

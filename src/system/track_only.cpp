@@ -235,7 +235,8 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
     const auto tt = Clock::now();
     SE3 T_est = T_init;
     Vec6 nu_est = nu;
-    const TrackResult tr = tracker.track(ef, T_est, nu_est);
+    // Coarse-to-fine only when the prediction is weak (first frames on a keyframe, after a failure).
+    const TrackResult tr = tracker.track(ef, T_est, nu_est, t_prev >= 0 ? 1 : 0);
     res.track_ms.push_back(msSince(tt));
     if (!cfg.debug_dir.empty()) {
       cv::Mat both;
