@@ -28,22 +28,16 @@ CameraModel FrameTracker::levelCamera(int level) const {
   return c;
 }
 
-void FrameTracker::pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img, std::vector<cv::Mat>& gx,
-                           std::vector<cv::Mat>& gy) const {
+void FrameTracker::pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img) const {
   img.resize(cfg_.levels);
-  gx.resize(cfg_.levels);
-  gy.resize(cfg_.levels);
   img[0] = frame;
-  for (int l = 1; l < cfg_.levels; ++l) cv::resize(img[l - 1], img[l], cv::Size(img[l - 1].cols / 2, img[l - 1].rows / 2), 0, 0, cv::INTER_AREA);
-  for (int l = 0; l < cfg_.levels; ++l) {
-    cv::Sobel(img[l], gx[l], CV_32F, 1, 0, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
-    cv::Sobel(img[l], gy[l], CV_32F, 0, 1, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
-  }
+  for (int l = 1; l < cfg_.levels; ++l)
+    cv::resize(img[l - 1], img[l], cv::Size(img[l - 1].cols / 2, img[l - 1].rows / 2), 0, 0, cv::INTER_AREA);
 }
 
 void FrameTracker::setKeyframe(const Keyframe& kf) {
-  std::vector<cv::Mat> img, gx, gy;
-  pyramid(kf.image, img, gx, gy);
+  std::vector<cv::Mat> img;
+  pyramid(kf.image, img);
   points_.assign(cfg_.levels, {});
   for (int l = 0; l < cfg_.levels; ++l) {
     const CameraModel c = levelCamera(l);
@@ -67,8 +61,8 @@ void FrameTracker::setKeyframe(const Keyframe& kf) {
   if (points_[0].empty()) throw std::invalid_argument("frame tracker: keyframe has no point with depth");
 }
 
-int FrameTracker::evaluate(int level, const cv::Mat& img, const cv::Mat& gx, const cv::Mat& gy, const SE3& T,
-                           double alpha, double beta, std::vector<double>& r,
+int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta,
+                           std::vector<double>& r,
                            std::vector<Eigen::Matrix<double, 1, 8>>* J) const {
   const CameraModel c = levelCamera(level);
   const Mat3 R = T.rotationMatrix();
@@ -81,9 +75,9 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const cv::Mat& gx, con
     const double iz = 1.0 / q.z();
     const double u = c.fx * q.x() * iz + c.cx, v = c.fy * q.y() * iz + c.cy;
     if (!(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
-    r.push_back(sampleBilinear(img, u, v) - (alpha * lp.ref + beta));
+    double dx, dy;
+    r.push_back(sampleBilinear(img, u, v, dx, dy) - (alpha * lp.ref + beta));
     if (J) {
-      const double dx = sampleBilinear(gx, u, v), dy = sampleBilinear(gy, u, v);
       const Vec3 dI_dq(dx * c.fx * iz, dy * c.fy * iz, -(dx * c.fx * q.x() + dy * c.fy * q.y()) * iz * iz);
       Eigen::Matrix<double, 1, 8> row;
       row.head<3>() = dI_dq.transpose();
@@ -98,8 +92,8 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const cv::Mat& gx, con
 
 FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha, double& beta) const {
   if (points_.empty()) throw std::logic_error("FrameTracker::track before setKeyframe");
-  std::vector<cv::Mat> img, gx, gy;
-  pyramid(frame, img, gx, gy);
+  std::vector<cv::Mat> img;
+  pyramid(frame, img);
   FrameTrackResult res;
   std::vector<double> r, r_new;
   std::vector<Eigen::Matrix<double, 1, 8>> J;
@@ -112,7 +106,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   };
   for (int l = cfg_.levels - 1; l >= 0; --l) {
     double lambda = 1e-3;
-    if (evaluate(l, img[l], gx[l], gy[l], T, alpha, beta, r, &J) < 6) continue;
+    if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
     double c0 = cost(r);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
       Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
@@ -131,7 +125,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
         const SE3 T_new = SE3::exp(delta.head<6>()) * T;
         const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
         std::vector<Eigen::Matrix<double, 1, 8>> J_new;
-        if (evaluate(l, img[l], gx[l], gy[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
+        if (evaluate(l, img[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
           lambda *= 10;
           continue;
         }

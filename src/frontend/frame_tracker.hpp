@@ -39,10 +39,11 @@ class FrameTracker {
   FrameTrackResult track(const cv::Mat& frame, SE3& T_f_kf, double& alpha, double& beta) const;
 
   // For tests: residuals and Jacobian (columns ξ (6), α, β) at pyramid level `level`.
-  int evaluate(int level, const cv::Mat& frame_level, const cv::Mat& gx, const cv::Mat& gy, const SE3& T_f_kf,
-               double alpha, double beta, std::vector<double>& r, std::vector<Eigen::Matrix<double, 1, 8>>* J) const;
-  // Builds the image pyramid and per-level gradients of a frame (exposed for tests).
-  void pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img, std::vector<cv::Mat>& gx, std::vector<cv::Mat>& gy) const;
+  // The image derivative is that of the bilinear interpolant itself, so the Jacobian is exact.
+  int evaluate(int level, const cv::Mat& frame_level, const SE3& T_f_kf, double alpha, double beta,
+               std::vector<double>& r, std::vector<Eigen::Matrix<double, 1, 8>>* J) const;
+  // Builds the image pyramid of a frame (exposed for tests).
+  void pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img) const;
 
  private:
   struct LevelPoint {
@@ -63,6 +64,18 @@ inline float sampleBilinear(const cv::Mat& img, double x, double y) {
   const float* r0 = img.ptr<float>(y0) + x0;
   const float* r1 = img.ptr<float>(y0 + 1) + x0;
   return (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+}
+
+// Bilinear sample and its exact derivatives (constant within a pixel cell along each axis).
+inline double sampleBilinear(const cv::Mat& img, double x, double y, double& dx, double& dy) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const double ax = x - x0, ay = y - y0;
+  const float* r0 = img.ptr<float>(y0) + x0;
+  const float* r1 = img.ptr<float>(y0 + 1) + x0;
+  const double top = (1 - ax) * r0[0] + ax * r0[1], bot = (1 - ax) * r1[0] + ax * r1[1];
+  dx = (1 - ay) * (r0[1] - r0[0]) + ay * (r1[1] - r1[0]);
+  dy = bot - top;
+  return top + ay * (bot - top);
 }
 
 }  // namespace eds

@@ -1,0 +1,68 @@
+// An event frame that cannot be tracked is reported as a failure, and tracking goes on from the next
+// keyframe instead of aborting.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+
+#include "sim/presets.hpp"
+#include "sim/writer.hpp"
+#include "system/track_only.hpp"
+#include "test_data.hpp"
+
+namespace eds {
+namespace {
+
+TEST(TrackOnly, UntrackableEventsAreReportedAndTrackingResumes) {
+  const auto dir = test::tempDir("track_fail");
+  const sim::Motion motion(sim::handheldMotion(1.2, 4));
+  sim::Scene scene = sim::makePreset("room", motion, 4);
+  scene.loadTextures();
+  CameraModel cam;
+  cam.width = 240, cam.height = 180;
+  cam.fx = cam.fy = 200;
+  cam.cx = 119.5, cam.cy = 89.5;
+  sim::SimConfig cfg;
+  cfg.fps = 20;
+  {
+    sim::EcdWriter writer(dir, false, true);
+    sim::Simulator(scene, cam, motion, cfg).run(motion.start(), motion.end(), writer);
+    writer.finish();
+  }
+  sim::writeEcdCalib(dir / "calib.txt", cam);
+  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
+  // Replace the events of 0.5-0.6 s by uniform noise: no prediction can explain them.
+  {
+    std::ifstream in(dir / "events.txt");
+    std::ofstream out(dir / "events_noisy.txt");
+    std::mt19937 rng(1);
+    std::uniform_int_distribution<int> ux(0, 239), uy(0, 179), up(0, 1);
+    std::string line;
+    while (std::getline(in, line)) {
+      const double t = std::stod(line);
+      if (t >= 0.5 && t < 0.6)
+        out << line.substr(0, line.find(' ')) << ' ' << ux(rng) << ' ' << uy(rng) << ' ' << up(rng) << '\n';
+      else
+        out << line << '\n';
+    }
+  }
+  std::filesystem::rename(dir / "events_noisy.txt", dir / "events.txt");
+  const Sequence seq(dir);
+  TrackOnlyConfig tc;
+  const TrackOnlyResult r = runTrackOnly(seq, tc);
+  ASSERT_FALSE(r.failures.empty());
+  for (const auto& f : r.failures) {
+    EXPECT_GE(toSeconds(f.t), 0.45) << f.reason;
+    EXPECT_LE(toSeconds(f.t), 0.65) << f.reason;
+  }
+  EXPECT_GT(toSeconds(r.trajectory.back().t), 1.1) << "tracking did not go on after the failures";
+  EXPECT_GE(r.keyframes, 2u);
+  writeTrackSummary(dir / "summary.json", r, tc);
+  std::ifstream js(dir / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(js)), {});
+  EXPECT_NE(text.find("\"failures\""), std::string::npos);
+  EXPECT_NE(text.find(r.failures.front().reason.substr(0, 20)), std::string::npos);
+}
+
+}  // namespace
+}  // namespace eds
