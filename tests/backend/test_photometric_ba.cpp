@@ -1,0 +1,188 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "backend/photometric_ba.hpp"
+#include "frontend/point_selection.hpp"
+#include "map/keyframe.hpp"
+#include "sim/presets.hpp"
+#include "sim/simulator.hpp"
+
+namespace eds {
+namespace {
+
+CameraModel camera() {
+  CameraModel c;
+  c.width = 240, c.height = 180;
+  c.fx = c.fy = 200;
+  c.cx = 119.5, c.cy = 89.5;
+  return c;
+}
+
+struct Frames : sim::SimSink {
+  void onEvents(const EventArray&) override {}
+  void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) override {
+    times.push_back(t);
+    images.push_back(intensity.clone());
+    depths.push_back(depth.clone());
+  }
+  std::vector<TimeNs> times;
+  std::vector<cv::Mat> images, depths;
+};
+
+// Frames of a textured plane along the hand-held motion, every 0.4 s (baselines of several cm, so
+// that depth is observable).
+struct Scene {
+  sim::Motion motion{sim::handheldMotion(2.01, 9)};
+  Frames frames;
+  Scene() {
+    // A plane (no occlusions: occlusion handling inside the solve is still to come, see issue #5).
+    sim::Scene scene = sim::makePreset("planar", motion, 9);
+    scene.loadTextures();
+    sim::SimConfig cfg;
+    cfg.fps = 1.0 / 0.4;
+    cfg.render.supersample = 2;
+    cfg.events.C_pos = cfg.events.C_neg = 1.0;  // events are not needed here
+    sim::Simulator(scene, camera(), motion, cfg).run(motion.start(), motion.end(), frames);
+  }
+};
+
+Scene& scene() {
+  static Scene s;
+  return s;
+}
+
+std::vector<BaPoint> pointsOf(const Scene& s, int host, double depth_noise, std::mt19937& rng, int F) {
+  Keyframe kf;
+  setKeyframeImage(kf, s.frames.images[host]);
+  PointSelectionConfig pc;
+  pc.tile = 16;
+  pc.fraction = 0.02;
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<BaPoint> pts;
+  for (const cv::Point& q : selectPoints(kf.grad_x, kf.grad_y, pc)) {
+    const float z = s.frames.depths[host].at<float>(q.y, q.x);
+    if (!(z > 0)) continue;
+    BaPoint p;
+    p.host = host;
+    p.u = static_cast<float>(q.x);
+    p.v = static_cast<float>(q.y);
+    p.inv_depth = 1.0 / (z * (1.0 + depth_noise * noise(rng)));
+    for (int t = 0; t < F; ++t)
+      if (t != host) p.targets.push_back(t);
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+TEST(PhotometricBA, JacobianMatchesNumericDifferences) {
+  const Scene& s = scene();
+  std::vector<BaFrame> frames(2);
+  for (int f = 0; f < 2; ++f) {
+    frames[f].T_w_c = s.motion.pose(s.frames.times[f]);
+    frames[f].image = s.frames.images[f];
+    frames[f].a = 0.1 * f;
+    frames[f].b = 0.02 * f;
+  }
+  std::mt19937 rng(1);
+  const std::vector<BaPoint> pts = pointsOf(s, 0, 0.05, rng, 2);
+  PhotometricBA ba(camera(), {});
+  int checked = 0;
+  double worst = 0;
+  for (std::size_t i = 0; i < pts.size() && checked < 40; i += 7) {
+    Eigen::Matrix<double, 8, 1> r, rp, rm;
+    Eigen::Matrix<double, 8, 17> J;
+    if (!ba.evaluate(frames, pts[i], 1, r, &J)) continue;
+    ++checked;
+    Eigen::Matrix<double, 8, 17> Jn;
+    const double h = 1e-7;
+    bool ok = true;
+    for (int c = 0; c < 17 && ok; ++c) {
+      std::vector<BaFrame> fp = frames, fm = frames;
+      BaPoint pp = pts[i], pm = pts[i];
+      const int f = c < 8 ? 0 : 1, k = c % 8;
+      if (c == 16) {
+        pp.inv_depth += h, pm.inv_depth -= h;
+      } else if (k < 6) {
+        fp[f].T_w_c = SE3::exp(Vec6::Unit(k) * h) * frames[f].T_w_c;
+        fm[f].T_w_c = SE3::exp(-Vec6::Unit(k) * h) * frames[f].T_w_c;
+      } else if (k == 6) {
+        fp[f].a += h, fm[f].a -= h;
+      } else {
+        fp[f].b += h, fm[f].b -= h;
+      }
+      ok = ba.evaluate(fp, pp, 1, rp, nullptr) && ba.evaluate(fm, pm, 1, rm, nullptr);
+      Jn.col(c) = (rp - rm) / (2 * h);
+    }
+    if (!ok) continue;
+    for (int c = 0; c < 17; ++c) {
+      if (Jn.col(c).norm() < 1e-9) continue;
+      worst = std::max(worst, (J.col(c) - Jn.col(c)).norm() / Jn.col(c).norm());
+    }
+  }
+  ASSERT_GT(checked, 20);
+  EXPECT_LT(worst, 1e-4);
+}
+
+TEST(PhotometricBA, RefinesPosesAndDepthsOfASimulatedPlane) {
+  const Scene& s = scene();
+  const int F = static_cast<int>(s.frames.images.size());
+  ASSERT_GE(F, 4);
+  std::mt19937 rng(2);
+  std::vector<BaFrame> frames(F);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int f = 0; f < F; ++f) {
+    frames[f].image = s.frames.images[f];
+    frames[f].T_w_c = s.motion.pose(s.frames.times[f]);
+    frames[f].fixed = f < 2;  // gauge: the first two keyframes (pose and scale)
+    if (!frames[f].fixed) {
+      Vec6 xi;
+      for (int k = 0; k < 3; ++k) xi[k] = 0.003 * n(rng), xi[k + 3] = 0.002 * n(rng);
+      frames[f].T_w_c = SE3::exp(xi) * frames[f].T_w_c;
+    }
+  }
+  const double noise = 0.1;
+  std::vector<BaPoint> pts = pointsOf(s, 0, noise, rng, F);
+  const auto more = pointsOf(s, 1, noise, rng, F);
+  pts.insert(pts.end(), more.begin(), more.end());
+  const auto depthError = [&](const std::vector<BaPoint>& ps) {
+    double ss = 0;
+    int c = 0;
+    for (const BaPoint& p : ps) {
+      if (p.outlier || p.targets.empty()) continue;
+      const float z = s.frames.depths[p.host].at<float>(static_cast<int>(p.v), static_cast<int>(p.u));
+      ss += std::pow(1.0 / p.inv_depth / z - 1.0, 2);
+      ++c;
+    }
+    return std::sqrt(ss / c);
+  };
+  const auto poseError = [&](const std::vector<BaFrame>& fr) {
+    double worst = 0;
+    for (int f = 0; f < F; ++f)
+      worst = std::max(worst, (fr[f].T_w_c.translation() - s.motion.pose(s.frames.times[f]).translation()).norm());
+    return worst;
+  };
+  const double d0 = depthError(pts), p0 = poseError(frames);
+  BaConfig cfg;
+  cfg.iterations = 30;
+  const BaStats st = PhotometricBA(camera(), cfg).optimize(frames, pts);
+  const double d1 = depthError(pts), p1 = poseError(frames);
+  double ratio = 0;
+  int nr = 0;
+  for (const BaPoint& p : pts)
+    if (!p.outlier && !p.targets.empty())
+      ratio += 1.0 / p.inv_depth / s.frames.depths[p.host].at<float>(static_cast<int>(p.v), static_cast<int>(p.u)), ++nr;
+  std::printf("[ ba ] mean depth ratio %.4f over %d points\n", ratio / nr, nr);
+  EXPECT_NEAR(ratio / nr, 1.0, 0.01);
+  std::printf("[ ba ] %zu points, %d residuals, rmse %.4f -> %.4f, depth error %.1f%% -> %.1f%%, worst position "
+              "error %.2f mm -> %.2f mm, %d outlier observations\n",
+              pts.size(), st.residuals, st.initial_rmse, st.final_rmse, d0 * 100, d1 * 100, p0 * 1e3, p1 * 1e3,
+              st.outliers_removed);
+  EXPECT_LT(st.final_rmse, st.initial_rmse * 0.5);
+  EXPECT_LT(d1, d0 / 3);
+  EXPECT_LT(p1, 2e-3);
+}
+
+}  // namespace
+}  // namespace eds
