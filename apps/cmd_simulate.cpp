@@ -39,7 +39,8 @@ CameraModel makeCamera(const SimulateArgs& a) {
   }
   int w = 0, h = 0;
   if (std::sscanf(a.resolution.c_str(), "%dx%d", &w, &h) != 2 || w <= 0 || h <= 0 || w > 4096 || h > 4096)
-    throw std::invalid_argument("--resolution must be WIDTHxHEIGHT (e.g. 240x180), got '" + a.resolution + "'");
+    throw std::invalid_argument("--resolution must be WIDTHxHEIGHT (e.g. 240x180), got '" + a.resolution +
+                                "'");
   // About 62 degrees of horizontal field of view, like a DAVIS240 with its standard lens (f = 200 px).
   CameraModel cam;
   cam.width = w, cam.height = h;
@@ -105,8 +106,10 @@ void runSimulate(const SimulateArgs& a) {
   const sim::SimStats st = simulator.run(t0, t1, writer);
   writer.finish();
   const double span = toSeconds(t1 - t0);
-  std::printf("simulated %.3f s: %zu events (%.3f M events/s), %zu frames, %zu renders, %.1f s wall (%.2fx real time)\n",
-              span, st.events, st.events / span * 1e-6, st.frames, st.renders, st.wall_s, st.wall_s / span);
+  std::printf(
+      "simulated %.3f s: %zu events (%.3f M events/s), %zu frames, %zu renders, %.1f s wall (%.2fx real "
+      "time)\n",
+      span, st.events, st.events / span * 1e-6, st.frames, st.renders, st.wall_s, st.wall_s / span);
   std::printf("wrote %s\n", out.string().c_str());
 }
 
@@ -115,29 +118,39 @@ void runSimulate(const SimulateArgs& a) {
 void addSimulateCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("simulate", "Simulate an event camera (and frames, depth, ground truth)");
   auto a = std::make_shared<SimulateArgs>();
-  cmd->add_option("--preset", a->preset, std::string("Built-in scene: ") + sim::presetNames())->capture_default_str();
-  cmd->add_option("--scene", a->scene_file, "Scene YAML file (instead of a preset)")->check(CLI::ExistingFile);
-  cmd->add_option("--esim-scene", a->scene_txt, "ESIM scene.txt (as in esim_poster6dof_planar)")->check(CLI::ExistingFile);
+  cmd->add_option("--preset", a->preset, std::string("Built-in scene: ") + sim::presetNames())
+      ->capture_default_str();
+  cmd->add_option("--scene", a->scene_file, "Scene YAML file (instead of a preset)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--esim-scene", a->scene_txt, "ESIM scene.txt (as in esim_poster6dof_planar)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--texture-dir", a->texture_dir, "Folder of the textures named in --esim-scene");
-  cmd->add_option("--trajectory", a->trajectory, "TUM/ECD trajectory file (default: built-in hand-held motion)");
-  cmd->add_option("--t-start", a->t_start, "Start of the window in the trajectory file, s")->capture_default_str();
+  cmd->add_option("--trajectory", a->trajectory,
+                  "TUM/ECD trajectory file (default: built-in hand-held motion)");
+  cmd->add_option("--t-start", a->t_start, "Start of the window in the trajectory file, s")
+      ->capture_default_str();
   cmd->add_option("--duration", a->duration, "Duration, s")->capture_default_str();
-  cmd->add_option("--smooth", a->smooth, "Gaussian smoothing of the trajectory, sigma in s")->capture_default_str();
+  cmd->add_option("--smooth", a->smooth, "Gaussian smoothing of the trajectory, sigma in s")
+      ->capture_default_str();
   cmd->add_option("--out", a->out, "Output folder (ECD layout)")->capture_default_str();
   cmd->add_option("--seed", a->seed, "Random seed (scene layout, noise)")->capture_default_str();
   cmd->add_option("--C", a->C, "Contrast threshold (log intensity)")->capture_default_str();
   cmd->add_option("--C-pos", a->C_pos, "Positive threshold (default --C)");
   cmd->add_option("--C-neg", a->C_neg, "Negative threshold (default --C)");
-  cmd->add_option("--contrast-noise", a->contrast_noise, "Std-dev of each crossing's threshold")->capture_default_str();
-  cmd->add_option("--noise-rate", a->noise_rate, "Background events per pixel per second")->capture_default_str();
+  cmd->add_option("--contrast-noise", a->contrast_noise, "Std-dev of each crossing's threshold")
+      ->capture_default_str();
+  cmd->add_option("--noise-rate", a->noise_rate, "Background events per pixel per second")
+      ->capture_default_str();
   cmd->add_option("--refractory", a->refractory, "Refractory period, s")->capture_default_str();
   cmd->add_option("--hot-pixels", a->hot_fraction, "Fraction of hot pixels")->capture_default_str();
   cmd->add_option("--hot-rate", a->hot_rate, "Hot pixel event rate, Hz")->capture_default_str();
   cmd->add_option("--fps", a->fps, "Frame rate (0: no frames)")->capture_default_str();
   cmd->add_option("--exposure", a->exposure, "Frame exposure time for motion blur, s")->capture_default_str();
   cmd->add_option("--render-hz", a->render_hz, "Fixed render rate (0: adaptive)")->capture_default_str();
-  cmd->add_option("--max-px-per-step", a->max_px, "Adaptive rendering: pixel motion per render")->capture_default_str();
-  cmd->add_option("--supersample", a->supersample, "Anti-aliasing rays per pixel per axis")->capture_default_str();
+  cmd->add_option("--max-px-per-step", a->max_px, "Adaptive rendering: pixel motion per render")
+      ->capture_default_str();
+  cmd->add_option("--supersample", a->supersample, "Anti-aliasing rays per pixel per axis")
+      ->capture_default_str();
   cmd->add_option("--resolution", a->resolution, "WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--calib", a->calib, "Camera: ECD calib.txt (with --resolution) or Kalibr camchain YAML");
   cmd->add_flag("--gzip", a->gzip, "Write events.txt.gz");

@@ -30,34 +30,51 @@ void runTrack(TrackArgs& a) {
   const TrackOnlyResult r = runTrackOnly(seq, a.cfg);
   writeTum(out / "trajectory_events.txt", r.trajectory);
   writeTrackSummary(out / "summary.json", r, a.cfg);
-  std::printf("tracked %zu of %zu event frames, %zu keyframes, %zu failures; %.2f s wall for %.2f s (real-time factor %.2f)\n",
-              r.tracked, r.event_frames, r.keyframes, r.failures.size(), r.wall_s, r.sequence_s,
-              r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
+  std::printf(
+      "tracked %zu of %zu event frames, %zu keyframes, %zu failures; %.2f s wall for %.2f s (real-time "
+      "factor %.2f)\n",
+      r.tracked, r.event_frames, r.keyframes, r.failures.size(), r.wall_s, r.sequence_s,
+      r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
   std::printf("wrote %s/trajectory_events.txt and summary.json\n", out.string().c_str());
 }
 
 }  // namespace
 
 void addTrackCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("track", "Track events against keyframes with known depth (tracking-only mode)");
+  auto* cmd =
+      app.add_subcommand("track", "Track events against keyframes with known depth (tracking-only mode)");
   auto a = std::make_shared<TrackArgs>();
-  cmd->add_option("sequence", a->sequence, "Sequence folder (needs events, frames, depth/ and ground truth)")->required();
+  cmd->add_option("sequence", a->sequence, "Sequence folder (needs events, frames, depth/ and ground truth)")
+      ->required();
   cmd->add_flag("--depth-from-gt", a->depth_from_gt, "Keyframe depth from the sequence's depth maps");
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
-  cmd->add_option("--events", a->cfg.event_frame.num_events, "Events per event frame (N)")->capture_default_str();
-  cmd->add_option("--overlap", a->cfg.event_frame.overlap, "Overlap of consecutive event frames, [0, 1)")->capture_default_str();
+  cmd->add_option("--events", a->cfg.event_frame.num_events, "Events per event frame (N)")
+      ->capture_default_str();
+  cmd->add_option("--overlap", a->cfg.event_frame.overlap, "Overlap of consecutive event frames, [0, 1)")
+      ->capture_default_str();
   cmd->add_option("--tile", a->cfg.points.tile, "Point selection tile size, px")->capture_default_str();
-  cmd->add_option("--points-fraction", a->cfg.points.fraction, "Fraction of each tile's pixels selected")->capture_default_str();
-  cmd->add_option("--max-points", a->cfg.points.max_points, "Cap on points per keyframe (0: none)")->capture_default_str();
-  cmd->add_option("--min-gradient", a->cfg.points.min_gradient, "Minimum log-gradient of a point")->capture_default_str();
-  cmd->add_option("--depth-noise", a->cfg.depth_noise, "Depth noise sigma, fraction of the median depth")->capture_default_str();
+  cmd->add_option("--points-fraction", a->cfg.points.fraction, "Fraction of each tile's pixels selected")
+      ->capture_default_str();
+  cmd->add_option("--max-points", a->cfg.points.max_points, "Cap on points per keyframe (0: none)")
+      ->capture_default_str();
+  cmd->add_option("--min-gradient", a->cfg.points.min_gradient, "Minimum log-gradient of a point")
+      ->capture_default_str();
+  cmd->add_option("--depth-noise", a->cfg.depth_noise, "Depth noise sigma, fraction of the median depth")
+      ->capture_default_str();
   cmd->add_option("--seed", a->cfg.seed, "Seed of the depth noise")->capture_default_str();
-  cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process from the first frame (0: all)")->capture_default_str();
-  cmd->add_option("--kf-rotation", a->cfg.policy.max_rotation_deg, "New keyframe above this rotation, deg")->capture_default_str();
-  cmd->add_option("--kf-translation", a->cfg.policy.max_translation_ratio, "New keyframe above this translation / median depth")->capture_default_str();
-  cmd->add_option("--kf-point-drop", a->cfg.policy.max_point_drop, "New keyframe when this fraction of points left view")->capture_default_str();
-  cmd->add_flag("!--no-frame-refine", a->cfg.refine_keyframes,
-                "Keyframe poses from events only (default: refined by aligning the frame to the previous keyframe)");
+  cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process from the first frame (0: all)")
+      ->capture_default_str();
+  cmd->add_option("--kf-rotation", a->cfg.policy.max_rotation_deg, "New keyframe above this rotation, deg")
+      ->capture_default_str();
+  cmd->add_option("--kf-translation", a->cfg.policy.max_translation_ratio,
+                  "New keyframe above this translation / median depth")
+      ->capture_default_str();
+  cmd->add_option("--kf-point-drop", a->cfg.policy.max_point_drop,
+                  "New keyframe when this fraction of points left view")
+      ->capture_default_str();
+  cmd->add_flag(
+      "!--no-frame-refine", a->cfg.refine_keyframes,
+      "Keyframe poses from events only (default: refined by aligning the frame to the previous keyframe)");
   cmd->add_flag("--debug-images", a->debug_images, "Write event frame | EGM prediction PNGs to OUT/debug");
   cmd->callback([a] { runTrack(*a); });
 }

@@ -31,8 +31,8 @@ EventArray syntheticEvents(std::size_t n) {
     s ^= s >> 7;
     s ^= s << 17;
     t += 1000 * static_cast<eds::TimeNs>((s >> 40) % 2);
-    ev.push_back(t, static_cast<std::uint16_t>((s >> 8) % 640),
-                 static_cast<std::uint16_t>((s >> 24) % 480), (s & 1) ? 1 : -1);
+    ev.push_back(t, static_cast<std::uint16_t>((s >> 8) % 640), static_cast<std::uint16_t>((s >> 24) % 480),
+                 (s & 1) ? 1 : -1);
   }
   return ev;
 }
@@ -51,8 +51,7 @@ void readAll(benchmark::State& state, const std::string& path, std::size_t chunk
       total += got;
     } while (got > 0);
   }
-  state.counters["events/s"] =
-      benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate);
+  state.counters["events/s"] = benchmark::Counter(static_cast<double>(total), benchmark::Counter::kIsRate);
 }
 
 // Random seeks followed by a short read: what a player jumping around a sequence does.
@@ -93,8 +92,7 @@ int main(int argc, char** argv) {
     const std::string path = (dir / (std::string(v.name) + ".h5")).string();
     const auto start = std::chrono::steady_clock::now();
     const auto used = eds::writeHdf5Events(path, events, 1'600'000'000'000'000, v.compression);
-    const double secs =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (used != v.compression) {
       std::fprintf(stderr, "blosc plugin unavailable: no blosc benchmark\n");
       fs::remove(path);
@@ -104,8 +102,7 @@ int main(int argc, char** argv) {
                  static_cast<double>(fs::file_size(path)) / 1e6, secs);
     const std::string base = std::string("BM_Hdf5Read/") + v.name;
     for (const std::size_t chunk : {std::size_t{1} << 16, std::size_t{1} << 20}) {
-      benchmark::RegisterBenchmark((base + "/chunk:" + std::to_string(chunk)).c_str(), readAll,
-                                   path, chunk)
+      benchmark::RegisterBenchmark((base + "/chunk:" + std::to_string(chunk)).c_str(), readAll, path, chunk)
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
     }

@@ -2,11 +2,11 @@
 // Locating ../shared/data for tests. Tests that need it skip when it is absent (a user's clone),
 // but fail in CI (env CI set), where it must be present.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 namespace eds::test {
 
@@ -17,8 +17,8 @@ inline std::filesystem::path sharedDataDir() {
 
 // A fresh, empty temporary folder for one test.
 inline std::filesystem::path tempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("eds_test_" + name + "_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("eds_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -27,9 +27,9 @@ inline std::filesystem::path tempDir(const std::string& name) {
 }  // namespace eds::test
 
 // Skips (or fails under CI) when the shared data item `rel` is absent; else sets `var` to its path.
-#define EDS_REQUIRE_SHARED(var, rel)                                                   \
-  const std::filesystem::path var = eds::test::sharedDataDir() / (rel);                \
-  if (!std::filesystem::exists(var)) {                                                 \
-    if (std::getenv("CI")) FAIL() << "shared data missing in CI: " << var;             \
-    GTEST_SKIP() << "shared data not found: " << var << " (set EDS_SHARED_DATA)";      \
+#define EDS_REQUIRE_SHARED(var, rel)                                              \
+  const std::filesystem::path var = eds::test::sharedDataDir() / (rel);           \
+  if (!std::filesystem::exists(var)) {                                            \
+    if (std::getenv("CI")) FAIL() << "shared data missing in CI: " << var;        \
+    GTEST_SKIP() << "shared data not found: " << var << " (set EDS_SHARED_DATA)"; \
   }

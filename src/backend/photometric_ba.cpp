@@ -19,8 +19,10 @@ double huberCost(double r, double d) {
 }  // namespace
 
 PhotometricBA::PhotometricBA(const CameraModel& pinhole, BaConfig cfg) : cam_(pinhole), cfg_(cfg) {
-  if (cam_.distortion != Distortion::kNone) throw std::invalid_argument("photometric BA: undistorted camera only");
-  if (cfg_.iterations < 1 || !(cfg_.huber > 0)) throw std::invalid_argument("photometric BA: bad configuration");
+  if (cam_.distortion != Distortion::kNone)
+    throw std::invalid_argument("photometric BA: undistorted camera only");
+  if (cfg_.iterations < 1 || !(cfg_.huber > 0))
+    throw std::invalid_argument("photometric BA: bad configuration");
 }
 
 bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& p, int target,

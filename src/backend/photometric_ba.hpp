@@ -9,9 +9,8 @@
 //
 // Gauge: the first keyframe (pose and brightness) is held fixed; monocular scale is left to the
 // damping and to the caller (a marginalization prior is the next step, see issue #5).
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/camera.hpp"
 #include "core/se3.hpp"
@@ -20,22 +19,22 @@ namespace eds {
 
 struct BaConfig {
   int iterations = 6;
-  double huber = 9.0 / 255.0;      // intensity units
+  double huber = 9.0 / 255.0;  // intensity units
   double grad_weight_c = 50.0 / 255.0;
-  double outlier_energy = 0.08;    // per-pattern RMS above this (after the solve): observation dropped
+  double outlier_energy = 0.08;  // per-pattern RMS above this (after the solve): observation dropped
   double lambda_initial = 1e-4;
 };
 
 struct BaFrame {
   SE3 T_w_c;
-  double a = 0, b = 0;       // affine brightness: I ≈ e^{-a} (I_true) + b, DSO convention
-  cv::Mat image;             // CV_32F in [0, 1], undistorted
+  double a = 0, b = 0;  // affine brightness: I ≈ e^{-a} (I_true) + b, DSO convention
+  cv::Mat image;        // CV_32F in [0, 1], undistorted
   bool fixed = false;
 };
 
 struct BaPoint {
   int host = 0;
-  float u = 0, v = 0;        // pixel in the host frame
+  float u = 0, v = 0;  // pixel in the host frame
   double inv_depth = 1.0;
   std::vector<int> targets;  // frames it is observed in (not the host)
   bool outlier = false;

@@ -10,7 +10,7 @@
 namespace eds {
 
 struct EventArray {
-  std::vector<TimeNs> t;        // nanoseconds
+  std::vector<TimeNs> t;         // nanoseconds
   std::vector<std::uint16_t> x;  // raw (distorted) pixel column
   std::vector<std::uint16_t> y;  // raw pixel row
   std::vector<std::int8_t> p;    // polarity: +1 or -1

@@ -67,7 +67,8 @@ class SO3 {
     const Mat3 W = hat(w);
     if (theta < 1e-6) return Mat3::Identity() + 0.5 * W + W * W / 6.0;
     const double t2 = theta * theta;
-    return Mat3::Identity() + (1 - std::cos(theta)) / t2 * W + (theta - std::sin(theta)) / (t2 * theta) * W * W;
+    return Mat3::Identity() + (1 - std::cos(theta)) / t2 * W +
+           (theta - std::sin(theta)) / (t2 * theta) * W * W;
   }
   static Mat3 rightJacobian(const Vec3& w) { return leftJacobian(-w); }
   static Mat3 leftJacobianInverse(const Vec3& w) {

@@ -8,7 +8,8 @@
 namespace eds {
 
 void EventFrameConfig::validate() const {
-  if (num_events <= 0) throw std::invalid_argument("event frame: num_events must be > 0, got " + std::to_string(num_events));
+  if (num_events <= 0)
+    throw std::invalid_argument("event frame: num_events must be > 0, got " + std::to_string(num_events));
   if (!(overlap >= 0.0 && overlap < 1.0))
     throw std::invalid_argument("event frame: overlap must be in [0, 1), got " + std::to_string(overlap));
   if (!(sigma_frac > 0)) throw std::invalid_argument("event frame: sigma_frac must be > 0");

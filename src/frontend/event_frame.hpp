@@ -4,9 +4,8 @@
 // its index (centred mid-packet, sigma = N/6), voted bilinearly into 4 pixels, lightly blurred (3x3)
 // and normalized to unit L2 norm (the tracker compares shapes, not magnitudes).
 #include <cstddef>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/events.hpp"
 #include "core/undistorter.hpp"
@@ -14,19 +13,19 @@
 namespace eds {
 
 struct EventFrameConfig {
-  int num_events = 20000;   // N
-  double overlap = 0.5;     // fraction of N shared with the previous packet, in [0, 1)
+  int num_events = 20000;         // N
+  double overlap = 0.5;           // fraction of N shared with the previous packet, in [0, 1)
   double sigma_frac = 1.0 / 6.0;  // Gaussian sigma in units of N
-  bool blur = true;         // 3x3 Gaussian
+  bool blur = true;               // 3x3 Gaussian
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
   std::size_t stride() const;  // events between consecutive packets' starts
 };
 
 struct EventFrame {
-  TimeNs t = 0;              // the median event's time
+  TimeNs t = 0;  // the median event's time
   TimeNs t_first = 0, t_last = 0;
-  cv::Mat delta;             // CV_32F, undistorted pixel grid, unit L2 norm (all zero if no events)
+  cv::Mat delta;  // CV_32F, undistorted pixel grid, unit L2 norm (all zero if no events)
 };
 
 class EventFrameBuilder {

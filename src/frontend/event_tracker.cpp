@@ -35,7 +35,8 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
   }
   if (p_kf_.empty())
     throw std::invalid_argument("event tracker: keyframe " + std::to_string(kf.id) +
-                                " has no point with a depth (" + std::to_string(kf.points.size()) + " points)");
+                                " has no point with a depth (" + std::to_string(kf.points.size()) +
+                                " points)");
   const auto n = static_cast<Eigen::Index>(p_kf_.size());
   idx_.reserve(n);
   m_.resize(n);
@@ -118,8 +119,8 @@ double huberCost(const Eigen::VectorXd& r, double d) {
 }
 }  // namespace
 
-int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, Eigen::VectorXd& r, Eigen::MatrixXd& J,
-                             double& cost_out, int& iterations) const {
+int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, Eigen::VectorXd& r,
+                             Eigen::MatrixXd& J, double& cost_out, int& iterations) const {
   int n = evaluate(img, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
   if (n < cfg_.min_points) return n;
   if (!(nu.norm() > 0)) {
@@ -225,7 +226,8 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
   if (!T_ef_kf.translation().allFinite() || !nu.allFinite()) {
     res.failure = "solver diverged (non-finite state)";
   } else if (res.correlation < cfg_.min_correlation) {
-    res.failure = "prediction does not explain the events (correlation " + std::to_string(res.correlation) + ")";
+    res.failure =
+        "prediction does not explain the events (correlation " + std::to_string(res.correlation) + ")";
   } else {
     res.ok = true;
   }
@@ -240,7 +242,8 @@ cv::Mat EventTracker::predictedImage(const Vec6& nu, int width, int height) cons
   if (!(s > 0)) return img;
   for (std::size_t i = 0; i < a_.size(); ++i) {
     const int x = static_cast<int>(std::lround(px_kf_[i].x)), y = static_cast<int>(std::lround(px_kf_[i].y));
-    if (x >= 0 && y >= 0 && x < width && y < height) img.at<float>(y, x) = static_cast<float>(a_[i].dot(nu) / s);
+    if (x >= 0 && y >= 0 && x < width && y < height)
+      img.at<float>(y, x) = static_cast<float>(a_[i].dot(nu) / s);
   }
   return img;
 }

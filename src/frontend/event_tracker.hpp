@@ -11,10 +11,9 @@
 // but the Jacobian P·D with P = (I − nnᵀ)/‖m‖ is formed as D − n (nᵀD), O(points), never N×N.
 // A 12x12 normal-equation solve per iteration needs no sparse machinery, and one pass over the
 // points builds it: no per-residual-block overhead.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/camera.hpp"
 #include "core/se3.hpp"
@@ -29,8 +28,8 @@ struct EventTrackerConfig {
   int levels = 3;              // coarse-to-fine: event frame blurred by 0, 1.5, 3 px
   double huber_initial = 0.1;  // on normalized residuals; then 1.345 * 1.4826 * MAD after each solve
   bool adapt_huber = true;
-  double border = 2.0;         // px: bicubic sampling needs a margin
-  int min_points = 30;         // fewer points in view: the frame cannot be tracked
+  double border = 2.0;           // px: bicubic sampling needs a margin
+  int min_points = 30;           // fewer points in view: the frame cannot be tracked
   double min_correlation = 0.2;  // n̂·n below this after the solve: reported as a failure
   double lambda_initial = 1e-3;
   void validate() const;
@@ -42,7 +41,7 @@ struct TrackResult {
   int points_in_view = 0;
   double cost = 0;
   double correlation = 0;  // n̂·n at the solution: 1 = the prediction explains the events perfectly
-  std::string failure;      // why not ok
+  std::string failure;     // why not ok
 };
 
 class EventTracker {
@@ -74,8 +73,8 @@ class EventTracker {
  private:
   CameraModel cam_;
   EventTrackerConfig cfg_;
-  std::vector<Vec3> p_kf_;   // 3D points in the keyframe
-  std::vector<Row6> a_;      // EGM rows
+  std::vector<Vec3> p_kf_;  // 3D points in the keyframe
+  std::vector<Row6> a_;     // EGM rows
   std::vector<cv::Point2f> px_kf_;
   // One Levenberg-Marquardt solve on one (blurred) event frame; returns the points in view.
   int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, Eigen::VectorXd& r, Eigen::MatrixXd& J,

@@ -62,8 +62,7 @@ void FrameTracker::setKeyframe(const Keyframe& kf) {
 }
 
 int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta,
-                           std::vector<double>& r,
-                           std::vector<Eigen::Matrix<double, 1, 8>>* J) const {
+                           std::vector<double>& r, std::vector<Eigen::Matrix<double, 1, 8>>* J) const {
   const CameraModel c = levelCamera(level);
   const Mat3 R = T.rotationMatrix();
   const Vec3 t = T.translation();

@@ -3,9 +3,8 @@
 // minimizes the Huber norm of I_f(π(T p)) − (α I_kf(u) + β) over T_f_kf and the affine brightness
 // (α, β), over DSO's 8-pixel pattern around each keyframe point, coarse-to-fine on an image pyramid,
 // from a given initial pose (the event tracker's, in EDS). Analytic Jacobians (checked by a test).
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/camera.hpp"
 #include "core/se3.hpp"
@@ -24,8 +23,8 @@ struct FrameTrackerConfig {
 
 struct FrameTrackResult {
   bool ok = false;
-  double rmse = 0;       // robust residual RMSE at the finest level, intensity units
-  int residuals = 0;     // in view at the finest level
+  double rmse = 0;    // robust residual RMSE at the finest level, intensity units
+  int residuals = 0;  // in view at the finest level
   int iterations = 0;
 };
 
@@ -47,8 +46,8 @@ class FrameTracker {
 
  private:
   struct LevelPoint {
-    Vec3 p_kf;       // pattern pixel's 3D point in the keyframe
-    float ref = 0;   // keyframe intensity at the pattern pixel
+    Vec3 p_kf;      // pattern pixel's 3D point in the keyframe
+    float ref = 0;  // keyframe intensity at the pattern pixel
   };
   CameraModel levelCamera(int level) const;
 

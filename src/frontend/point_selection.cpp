@@ -8,8 +8,10 @@ namespace eds {
 
 void PointSelectionConfig::validate() const {
   if (tile < 1) throw std::invalid_argument("point selection: tile must be >= 1");
-  if (!(fraction > 0 && fraction <= 1)) throw std::invalid_argument("point selection: fraction must be in (0, 1]");
-  if (border < 0 || max_points < 0) throw std::invalid_argument("point selection: negative border or max_points");
+  if (!(fraction > 0 && fraction <= 1))
+    throw std::invalid_argument("point selection: fraction must be in (0, 1]");
+  if (border < 0 || max_points < 0)
+    throw std::invalid_argument("point selection: negative border or max_points");
 }
 
 std::vector<cv::Point> selectPoints(const cv::Mat& gx, const cv::Mat& gy, const PointSelectionConfig& cfg) {
@@ -48,9 +50,8 @@ std::vector<cv::Point> selectPoints(const cv::Mat& gx, const cv::Mat& gy, const 
   std::vector<cv::Point> out;
   out.reserve(chosen.size());
   for (const Cand& c : chosen) out.push_back(c.p);
-  std::sort(out.begin(), out.end(), [](const cv::Point& a, const cv::Point& b) {
-    return a.y != b.y ? a.y < b.y : a.x < b.x;
-  });
+  std::sort(out.begin(), out.end(),
+            [](const cv::Point& a, const cv::Point& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
   return out;
 }
 

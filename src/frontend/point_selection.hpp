@@ -2,22 +2,22 @@
 // Point selection (paper §3.2): the image is cut into tiles and, in each, the pixels with the largest
 // log-intensity gradient are kept, so that points spread over the image rather than cluster on the
 // strongest edge. The same points feed the event tracker and (a subset) the back-end.
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace eds {
 
 struct PointSelectionConfig {
-  int tile = 11;                 // tile size, px
-  double fraction = 0.12;        // fraction of each tile's pixels kept
-  double min_gradient = 0.02;    // |∇ log I| per pixel below this is never selected (flat areas)
-  int border = 4;                // pixels this close to the image border are skipped
-  int max_points = 0;            // 0 = no cap; else the strongest over the whole image
-  void validate() const;         // throws std::invalid_argument
+  int tile = 11;               // tile size, px
+  double fraction = 0.12;      // fraction of each tile's pixels kept
+  double min_gradient = 0.02;  // |∇ log I| per pixel below this is never selected (flat areas)
+  int border = 4;              // pixels this close to the image border are skipped
+  int max_points = 0;          // 0 = no cap; else the strongest over the whole image
+  void validate() const;       // throws std::invalid_argument
 };
 
 // Returns selected pixel coordinates (x, y), sorted by row then column.
-std::vector<cv::Point> selectPoints(const cv::Mat& grad_x, const cv::Mat& grad_y, const PointSelectionConfig& cfg);
+std::vector<cv::Point> selectPoints(const cv::Mat& grad_x, const cv::Mat& grad_y,
+                                    const PointSelectionConfig& cfg);
 
 }  // namespace eds

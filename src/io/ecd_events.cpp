@@ -63,10 +63,12 @@ std::size_t EcdEventSource::read(EventArray& out, std::size_t max_events) {
         if (!q || !text::atFieldEnd(q, end)) fail(*p == '-' ? "negative timestamp" : "malformed timestamp");
         q = text::skipSpaces(q, end);
         const char* r = text::parseUint(q, end, x);
-        if (!r || !text::atFieldEnd(r, end)) fail(q == end ? "missing x (expected 't x y p')" : "malformed x");
+        if (!r || !text::atFieldEnd(r, end))
+          fail(q == end ? "missing x (expected 't x y p')" : "malformed x");
         q = text::skipSpaces(r, end);
         r = text::parseUint(q, end, y);
-        if (!r || !text::atFieldEnd(r, end)) fail(q == end ? "missing y (expected 't x y p')" : "malformed y");
+        if (!r || !text::atFieldEnd(r, end))
+          fail(q == end ? "missing y (expected 't x y p')" : "malformed y");
         q = text::skipSpaces(r, end);
         if (q < end && *q == '1') {
           pol = 1, ++q;

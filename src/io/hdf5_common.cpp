@@ -31,7 +31,9 @@ std::string lastHdf5Error() {
   return " (HDF5: " + msgs.first + ": " + msgs.second + ")";
 }
 
-void failH5(const std::string& file, const std::string& what) { throw InputError(file, what + lastHdf5Error()); }
+void failH5(const std::string& file, const std::string& what) {
+  throw InputError(file, what + lastHdf5Error());
+}
 
 std::int64_t floorDiv(std::int64_t a, std::int64_t b) {
   return a / b - ((a % b != 0) && ((a < 0) != (b < 0)));

@@ -43,8 +43,7 @@ H5T_conv_ret_t abortOnOverflow(H5T_conv_except_t type, hid_t, hid_t, void*, void
 Hid openDataset(hid_t file, const std::string& path, const char* name, std::size_t* length) {
   const std::string full(name);
   const auto slash = full.find('/');
-  if (slash != std::string::npos &&
-      H5Lexists(file, full.substr(0, slash).c_str(), H5P_DEFAULT) <= 0) {
+  if (slash != std::string::npos && H5Lexists(file, full.substr(0, slash).c_str(), H5P_DEFAULT) <= 0) {
     throw InputError(path, "missing group '" + full.substr(0, slash) + "' (expected " + full + ")");
   }
   if (H5Lexists(file, name, H5P_DEFAULT) <= 0) throw InputError(path, "missing dataset " + full);
@@ -71,11 +70,11 @@ Hid openDataset(hid_t file, const std::string& path, const char* name, std::size
     std::size_t nvalues = 0;
     unsigned flags = 0, config = 0;
     char filter_name[64] = {};
-    const H5Z_filter_t id = H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &nvalues,
-                                           nullptr, sizeof filter_name, filter_name, &config);
+    const H5Z_filter_t id = H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &nvalues, nullptr,
+                                           sizeof filter_name, filter_name, &config);
     if (id < 0 || (id == kBloscFilter ? !loadBlosc() : H5Zfilter_avail(id) <= 0)) {
-      throw InputError(path, full + " needs HDF5 filter " + std::to_string(id) + " ('" +
-                                 filter_name + "'), which cannot be loaded" +
+      throw InputError(path, full + " needs HDF5 filter " + std::to_string(id) + " ('" + filter_name +
+                                 "'), which cannot be loaded" +
                                  (id == kBloscFilter ? ": install hdf5-filter-plugin-blosc-serial "
                                                        "or set HDF5_PLUGIN_PATH"
                                                      : ""));
@@ -150,8 +149,7 @@ struct Hdf5EventSource::Impl {
   TimeNs toNs(std::int64_t t_us) const {
     TimeNs sum = 0, ns = 0;
     if (__builtin_add_overflow(t_us, t_offset_us, &sum) || __builtin_mul_overflow(sum, 1000, &ns)) {
-      throw InputError(path,
-                       "events/t = " + std::to_string(t_us) + " + t_offset overflows int64 ns");
+      throw InputError(path, "events/t = " + std::to_string(t_us) + " + t_offset overflows int64 ns");
     }
     return ns;
   }
@@ -178,10 +176,10 @@ struct Hdf5EventSource::Impl {
     // Sorted, so the first and last values bound all: (t + offset) * 1000 must fit int64.
     constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max() / 1000;
     std::int64_t lo = 0, hi = 0;
-    if (__builtin_add_overflow(first, t_offset_us, &lo) ||
-        __builtin_add_overflow(last, t_offset_us, &hi) || lo < -kMax || hi > kMax) {
-      throw InputError(path, "events/t[" + std::to_string(pos) + ".." +
-                                 std::to_string(pos + count) + ") + t_offset overflows int64 ns");
+    if (__builtin_add_overflow(first, t_offset_us, &lo) || __builtin_add_overflow(last, t_offset_us, &hi) ||
+        lo < -kMax || hi > kMax) {
+      throw InputError(path, "events/t[" + std::to_string(pos) + ".." + std::to_string(pos + count) +
+                                 ") + t_offset overflows int64 ns");
     }
     prev_t_us = last;
     has_prev = true;
@@ -200,8 +198,8 @@ struct Hdf5EventSource::Impl {
       for (std::size_t i = 0; i < count; ++i) {
         const int v = p_unsigned ? static_cast<std::uint8_t>(p[i]) : p[i];
         if (v != 0 && v != 1 && v != -1) {
-          throw InputError(path, "events/p[" + std::to_string(pos + i) + "] = " +
-                                     std::to_string(v) + ": polarity must be 0/1 or -1/+1");
+          throw InputError(path, "events/p[" + std::to_string(pos + i) + "] = " + std::to_string(v) +
+                                     ": polarity must be 0/1 or -1/+1");
         }
       }
     }
@@ -302,8 +300,7 @@ std::size_t Hdf5EventSource::read(EventArray& out, std::size_t max_events) {
     m.readRange(kT, H5T_NATIVE_INT64, out.t.data() + old, m.pos, count);
     m.readRange(kX, H5T_NATIVE_UINT16, out.x.data() + old, m.pos, count);
     m.readRange(kY, H5T_NATIVE_UINT16, out.y.data() + old, m.pos, count);
-    m.readRange(kP, m.p_unsigned ? H5T_NATIVE_UINT8 : H5T_NATIVE_INT8, out.p.data() + old, m.pos,
-                count);
+    m.readRange(kP, m.p_unsigned ? H5T_NATIVE_UINT8 : H5T_NATIVE_INT8, out.p.data() + old, m.pos, count);
     m.checkAndConvert(out, old, count);
   } catch (...) {
     out.resize(old);  // leave out as it was
@@ -374,8 +371,7 @@ void Hdf5EventSource::seek(TimeNs t_ns) {
   if (lo < hi) {
     std::vector<std::int64_t> block(hi - lo);
     m.readRange(kT, H5T_NATIVE_INT64, block.data(), lo, block.size());
-    lo += static_cast<std::size_t>(std::lower_bound(block.begin(), block.end(), target) -
-                                   block.begin());
+    lo += static_cast<std::size_t>(std::lower_bound(block.begin(), block.end(), target) - block.begin());
   }
   m.pos = lo;
   m.has_prev = false;

@@ -58,8 +58,7 @@ enum class Hdf5Compression { kNone, kGzip, kBloscIfAvailable };
 // ms_to_idx: uint64, t_offset: int64 scalar). Times are stored in whole microseconds (floor).
 // kBloscIfAvailable falls back to gzip when the blosc plugin cannot be loaded. Returns the
 // compression actually used. Throws InputError naming the file on failure.
-Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& events,
-                                std::int64_t t_offset_us,
+Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& events, std::int64_t t_offset_us,
                                 Hdf5Compression compression = Hdf5Compression::kNone);
 
 // True when HDF5 can load the blosc filter (after adding the Debian plugin directory).

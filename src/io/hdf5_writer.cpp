@@ -15,8 +15,8 @@ using hdf5::Hid;
 using hdf5::kBloscFilter;
 using hdf5::QuietHdf5;
 
-Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& events,
-                                std::int64_t t_offset_us, Hdf5Compression compression) {
+Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& events, std::int64_t t_offset_us,
+                                Hdf5Compression compression) {
   if (compression == Hdf5Compression::kBloscIfAvailable && !hdf5BloscAvailable()) {
     compression = Hdf5Compression::kGzip;
   }
@@ -60,10 +60,8 @@ Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& event
         H5Pset_filter(dcpl.get(), kBloscFilter, H5Z_FLAG_MANDATORY, 7, cd);
       }
     }
-    Hid ds(H5Dcreate2(file.get(), name, ftype, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-           H5Dclose);
-    if (!ds.valid() ||
-        (len > 0 && H5Dwrite(ds.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)) {
+    Hid ds(H5Dcreate2(file.get(), name, ftype, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose);
+    if (!ds.valid() || (len > 0 && H5Dwrite(ds.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)) {
       failH5(path, std::string("cannot write ") + name);
     }
   };
@@ -74,11 +72,10 @@ Hdf5Compression writeHdf5Events(const std::string& path, const EventArray& event
   write("ms_to_idx", H5T_STD_U64LE, H5T_NATIVE_UINT64, ms_to_idx.data(), ms_to_idx.size());
 
   Hid scalar(H5Screate(H5S_SCALAR), H5Sclose);
-  Hid ds(H5Dcreate2(file.get(), "t_offset", H5T_STD_I64LE, scalar.get(), H5P_DEFAULT, H5P_DEFAULT,
-                    H5P_DEFAULT),
-         H5Dclose);
-  if (!ds.valid() ||
-      H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &t_offset_us) < 0) {
+  Hid ds(
+      H5Dcreate2(file.get(), "t_offset", H5T_STD_I64LE, scalar.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+      H5Dclose);
+  if (!ds.valid() || H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &t_offset_us) < 0) {
     failH5(path, "cannot write t_offset");
   }
   ds.reset();

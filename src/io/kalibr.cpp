@@ -21,8 +21,7 @@ std::size_t lineOf(const YAML::Mark& mark) {
 // Parses one camera entry; every error names the file and the line of the offending node.
 class CameraParser {
  public:
-  CameraParser(const std::string& path, std::string camera)
-      : path_(path), camera_(std::move(camera)) {}
+  CameraParser(const std::string& path, std::string camera) : path_(path), camera_(std::move(camera)) {}
 
   KalibrCamera parse(const YAML::Node& node) {
     if (!node.IsMap()) fail(node, "is not a mapping of keys");
@@ -56,14 +55,12 @@ class CameraParser {
     if (cam.distortion_model == "radtan") {
       if (!coeffs) require(node, "distortion_coeffs");
       if (count != 4 && count != 5) {
-        fail(where, "radtan needs 4 or 5 distortion_coeffs (k1 k2 p1 p2 [k3]), got " +
-                        std::to_string(count));
+        fail(where, "radtan needs 4 or 5 distortion_coeffs (k1 k2 p1 p2 [k3]), got " + std::to_string(count));
       }
     } else if (cam.distortion_model == "equidistant") {
       if (!coeffs) require(node, "distortion_coeffs");
       if (count != 4) {
-        fail(where,
-             "equidistant needs 4 distortion_coeffs (k1 k2 k3 k4), got " + std::to_string(count));
+        fail(where, "equidistant needs 4 distortion_coeffs (k1 k2 k3 k4), got " + std::to_string(count));
       }
     } else if (cam.distortion_model == "none") {
       if (count != 0) fail(where, "distortion_model none takes no distortion_coeffs");

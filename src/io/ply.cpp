@@ -66,8 +66,10 @@ PointCloud readPly(const std::filesystem::path& file) {
   cloud.intensity.assign(count, 0.f);
   std::vector<float> rec(props.size());
   for (std::size_t i = 0; i < count; ++i) {
-    if (!in.read(reinterpret_cast<char*>(rec.data()), static_cast<std::streamsize>(rec.size() * sizeof(float))))
-      throw InputError(file.string(), "truncated: vertex " + std::to_string(i) + " of " + std::to_string(count));
+    if (!in.read(reinterpret_cast<char*>(rec.data()),
+                 static_cast<std::streamsize>(rec.size() * sizeof(float))))
+      throw InputError(file.string(),
+                       "truncated: vertex " + std::to_string(i) + " of " + std::to_string(count));
     cloud.xyz[i] = {rec[0], rec[1], rec[2]};
     if (has_intensity) cloud.intensity[i] = rec[3];
   }

@@ -39,9 +39,9 @@ CameraModel readEcdCalib(const fs::path& file) {
   }
   if (v.empty()) throw InputError(reader.fileName(), "empty calibration file");
   if (v.size() != 4 && v.size() != 8 && v.size() != 9)
-    throw InputError(reader.fileName(), line_no,
-                     "expected 'fx fy cx cy [k1 k2 p1 p2 [k3]]' (4, 8 or 9 numbers), got " +
-                         std::to_string(v.size()));
+    throw InputError(
+        reader.fileName(), line_no,
+        "expected 'fx fy cx cy [k1 k2 p1 p2 [k3]]' (4, 8 or 9 numbers), got " + std::to_string(v.size()));
   CameraModel cam;
   cam.fx = v[0], cam.fy = v[1], cam.cx = v[2], cam.cy = v[3];
   for (std::size_t i = 4; i < v.size(); ++i) cam.k[i - 4] = v[i];
@@ -187,7 +187,8 @@ std::optional<cv::Mat> Sequence::loadDepth(std::size_t i) const {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return std::nullopt;
   cv::Mat mm = cv::imread(path.string(), cv::IMREAD_ANYDEPTH);
-  if (mm.empty() || mm.type() != CV_16U) throw InputError(path.string(), "depth map must be a uint16 PNG (mm)");
+  if (mm.empty() || mm.type() != CV_16U)
+    throw InputError(path.string(), "depth map must be a uint16 PNG (mm)");
   cv::Mat metres;
   mm.convertTo(metres, CV_32F, 1e-3);
   return metres;

@@ -9,11 +9,10 @@
 // "missing" only when the requested work needs it.
 #include <filesystem>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "core/camera.hpp"
 #include "io/event_source.hpp"

@@ -67,8 +67,9 @@ Trajectory readTum(const std::filesystem::path& file, bool allow_unsorted) {
     if (std::abs(qn - 1.0) > 1e-2)
       throw InputError(reader.fileName(), ln, "quaternion is not unit (norm " + std::to_string(qn) + ")");
     if (!allow_unsorted && !traj.empty() && t < traj.back().t)
-      throw InputError(reader.fileName(), ln, "timestamp decreases (" + std::to_string(toSeconds(t)) +
-                                                  " s after " + std::to_string(toSeconds(traj.back().t)) + " s)");
+      throw InputError(reader.fileName(), ln,
+                       "timestamp decreases (" + std::to_string(toSeconds(t)) + " s after " +
+                           std::to_string(toSeconds(traj.back().t)) + " s)");
     traj.push_back({t, SE3(q_w_c, Vec3(v[0], v[1], v[2]))});
   }
   return traj;
@@ -83,8 +84,8 @@ void writeTum(const std::filesystem::path& file, const Trajectory& traj) {
     const Quat& q = s.T_w_c.quaternion();
     const long long sec = s.t / kNsPerSec;
     const long long ns = s.t % kNsPerSec;
-    std::fprintf(f, "%lld.%09lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", sec, ns, p.x(), p.y(), p.z(),
-                 q.x(), q.y(), q.z(), q.w());
+    std::fprintf(f, "%lld.%09lld %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", sec, ns, p.x(), p.y(), p.z(), q.x(),
+                 q.y(), q.z(), q.w());
   }
   if (std::fclose(f) != 0) throw InputError(file.string(), "write failed");
 }

@@ -113,13 +113,12 @@ void EventGenerator::step(const cv::Mat& log_image, TimeNs t1, EventArray& out) 
   for (const auto& ev : row_events_) merged_.insert(merged_.end(), ev.begin(), ev.end());
   addNoise(t0, t1);
   // Time order; ties by pixel so that the output does not depend on thread scheduling.
-  std::sort(merged_.begin(), merged_.end(), [](const Pending& l, const Pending& r) {
-    return l.t != r.t ? l.t < r.t : l.pixel < r.pixel;
-  });
+  std::sort(merged_.begin(), merged_.end(),
+            [](const Pending& l, const Pending& r) { return l.t != r.t ? l.t < r.t : l.pixel < r.pixel; });
   out.reserve(out.size() + merged_.size());
   for (const Pending& e : merged_)
-    out.push_back(e.t, static_cast<std::uint16_t>(e.pixel % width_), static_cast<std::uint16_t>(e.pixel / width_),
-                  e.polarity);
+    out.push_back(e.t, static_cast<std::uint16_t>(e.pixel % width_),
+                  static_cast<std::uint16_t>(e.pixel / width_), e.polarity);
   prev_ = log_image.clone();
   t_prev_ = t1;
   ++steps_;

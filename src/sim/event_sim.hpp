@@ -7,9 +7,8 @@
 // (seed, pixel, draw index), not from a shared generator.
 #include <cstdint>
 #include <limits>
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/events.hpp"
 
@@ -49,12 +48,12 @@ class EventGenerator {
 
   int width_, height_;
   EventSimConfig cfg_;
-  cv::Mat prev_;                       // previous log image
-  std::vector<float> ref_;             // reference level per pixel
-  std::vector<TimeNs> last_event_;     // for the refractory period
-  std::vector<std::uint32_t> draws_;   // per-pixel draw counters (threshold noise)
+  cv::Mat prev_;                          // previous log image
+  std::vector<float> ref_;                // reference level per pixel
+  std::vector<TimeNs> last_event_;        // for the refractory period
+  std::vector<std::uint32_t> draws_;      // per-pixel draw counters (threshold noise)
   std::vector<float> thr_pos_, thr_neg_;  // each pixel's next thresholds
-  std::vector<std::uint32_t> hot_;     // hot pixel indices
+  std::vector<std::uint32_t> hot_;        // hot pixel indices
   TimeNs t_prev_ = 0;
   std::uint64_t steps_ = 0;
   // Scratch, reused every step (no allocation in the per-step loop once warm).

@@ -26,7 +26,8 @@ Trajectory smoothTrajectory(const Trajectory& traj, double sigma_s);
 
 // Cuts [t_start, t_start + duration] out of a trajectory and shifts time so it starts at 0.
 // Throws InputError (naming `source`) if the trajectory is shorter than asked.
-Trajectory cutTrajectory(const Trajectory& traj, double t_start_s, double duration_s, const std::string& source);
+Trajectory cutTrajectory(const Trajectory& traj, double t_start_s, double duration_s,
+                         const std::string& source);
 
 // A built-in hand-held-like motion: smooth, mostly rotational shake with slow translation, starting at
 // the origin looking along +z (camera axes), lively enough for ~1 M events/s in the room preset.

@@ -93,7 +93,8 @@ void Renderer::prepare(const SE3& T_w_c, std::vector<PlaneInView>& out) const {
     if (std::abs(v.num) < 1e-9) continue;  // camera in the plane: it sees it edge-on
     const double inv_texel = 1.0 / pl.texel;
     v.ux = u.x() * inv_texel, v.uy = u.y() * inv_texel, v.uz = u.z() * inv_texel, v.uc = u.dot(c) * inv_texel;
-    v.vx = vv.x() * inv_texel, v.vy = vv.y() * inv_texel, v.vz = vv.z() * inv_texel, v.vc = vv.dot(c) * inv_texel;
+    v.vx = vv.x() * inv_texel, v.vy = vv.y() * inv_texel, v.vz = vv.z() * inv_texel,
+    v.vc = vv.dot(c) * inv_texel;
     v.col0 = v.texture->cols / 2.0;
     v.row0 = v.texture->rows / 2.0;
     if (scene_.mirror_outside) {
@@ -105,10 +106,9 @@ void Renderer::prepare(const SE3& T_w_c, std::vector<PlaneInView>& out) const {
       // Outline sampled densely (distortion bends straight edges), clipped to z > near.
       double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
       bool any = false, behind = false;
-      const Vec3 corners[4] = {c - 0.5 * pl.size_u * u - 0.5 * pl.size_v * vv,
-                               c + 0.5 * pl.size_u * u - 0.5 * pl.size_v * vv,
-                               c + 0.5 * pl.size_u * u + 0.5 * pl.size_v * vv,
-                               c - 0.5 * pl.size_u * u + 0.5 * pl.size_v * vv};
+      const Vec3 corners[4] = {
+          c - 0.5 * pl.size_u * u - 0.5 * pl.size_v * vv, c + 0.5 * pl.size_u * u - 0.5 * pl.size_v * vv,
+          c + 0.5 * pl.size_u * u + 0.5 * pl.size_v * vv, c - 0.5 * pl.size_u * u + 0.5 * pl.size_v * vv};
       constexpr int kSteps = 24;
       for (int e = 0; e < 4; ++e) {
         const Vec3& a = corners[e];

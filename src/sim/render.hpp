@@ -33,8 +33,8 @@ class Renderer {
   const Scene& scene_;
   CameraModel camera_;
   RenderOptions opts_;
-  int ss_w_ = 0, ss_h_ = 0;        // supersampled grid size
-  std::vector<float> ray_x_, ray_y_;  // normalized ray (x, y, 1) per supersample
+  int ss_w_ = 0, ss_h_ = 0;                 // supersampled grid size
+  std::vector<float> ray_x_, ray_y_;        // normalized ray (x, y, 1) per supersample
   std::vector<float> centre_x_, centre_y_;  // rays of the pixel centres (for depth)
 };
 

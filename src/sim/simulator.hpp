@@ -13,12 +13,12 @@ namespace eds::sim {
 struct SimConfig {
   EventSimConfig events;
   RenderOptions render;
-  double fps = 25.0;              // frames per second; 0 = no frames
-  double exposure_s = 0.0;        // frame exposure (motion blur); 0 = instantaneous
-  double render_hz = 0.0;         // fixed render rate; 0 = adaptive
-  double max_px_per_step = 0.5;   // adaptive: largest pixel displacement between renders
+  double fps = 25.0;             // frames per second; 0 = no frames
+  double exposure_s = 0.0;       // frame exposure (motion blur); 0 = instantaneous
+  double render_hz = 0.0;        // fixed render rate; 0 = adaptive
+  double max_px_per_step = 0.5;  // adaptive: largest pixel displacement between renders
   double min_step_s = 2e-5, max_step_s = 5e-3;
-  bool quantize_8bit = false;     // events from 8-bit images (as ESIM on stored frames)
+  bool quantize_8bit = false;  // events from 8-bit images (as ESIM on stored frames)
 };
 
 struct SimStats {

@@ -12,7 +12,8 @@ namespace eds::sim {
 
 namespace fs = std::filesystem;
 
-EcdWriter::EcdWriter(const fs::path& dir, bool gzip, bool write_depth) : dir_(dir), write_depth_(write_depth) {
+EcdWriter::EcdWriter(const fs::path& dir, bool gzip, bool write_depth)
+    : dir_(dir), write_depth_(write_depth) {
   std::error_code ec;
   fs::create_directories(dir / "images", ec);
   if (ec) throw InputError(dir.string(), "cannot create output folder: " + ec.message());
@@ -104,7 +105,8 @@ void EcdWriter::onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth
 void EcdWriter::finish() {
   flushText();
   if (gz_) {
-    if (gzclose(static_cast<gzFile>(gz_)) != Z_OK) throw InputError((dir_ / "events.txt.gz").string(), "close failed");
+    if (gzclose(static_cast<gzFile>(gz_)) != Z_OK)
+      throw InputError((dir_ / "events.txt.gz").string(), "close failed");
     gz_ = nullptr;
   }
   if (events_) {
@@ -122,8 +124,8 @@ void writeEcdCalib(const fs::path& file, const CameraModel& c) {
     throw std::invalid_argument("calib.txt cannot hold an equidistant model; write a Kalibr camchain");
   std::FILE* f = std::fopen(file.c_str(), "w");
   if (!f) throw InputError(file.string(), "cannot open for writing");
-  std::fprintf(f, "%.9f %.9f %.9f %.9f %.12g %.12g %.12g %.12g %.12g\n", c.fx, c.fy, c.cx, c.cy, c.k[0], c.k[1],
-               c.k[2], c.k[3], c.k[4]);
+  std::fprintf(f, "%.9f %.9f %.9f %.9f %.12g %.12g %.12g %.12g %.12g\n", c.fx, c.fy, c.cx, c.cy, c.k[0],
+               c.k[1], c.k[2], c.k[3], c.k[4]);
   std::fclose(f);
 }
 
@@ -131,7 +133,8 @@ void writeKalibrCamchain(const fs::path& file, const CameraModel& c) {
   std::FILE* f = std::fopen(file.c_str(), "w");
   if (!f) throw InputError(file.string(), "cannot open for writing");
   const int n = c.distortion == Distortion::kRadTan ? 5 : c.distortion == Distortion::kEquidistant ? 4 : 0;
-  std::fprintf(f, "cam0:\n  camera_model: pinhole\n  intrinsics: [%.9f, %.9f, %.9f, %.9f]\n", c.fx, c.fy, c.cx, c.cy);
+  std::fprintf(f, "cam0:\n  camera_model: pinhole\n  intrinsics: [%.9f, %.9f, %.9f, %.9f]\n", c.fx, c.fy,
+               c.cx, c.cy);
   std::fprintf(f, "  distortion_model: %s\n  distortion_coeffs: [", toString(c.distortion));
   for (int i = 0; i < n; ++i) std::fprintf(f, i ? ", %.12g" : "%.12g", c.k[i]);
   std::fprintf(f, "]\n  resolution: [%d, %d]\n", c.width, c.height);

@@ -16,7 +16,9 @@ namespace eds {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 // Hands out packets of N events every `stride` events from a streaming source, keeping only a
 // bounded window of events in memory.
@@ -53,8 +55,8 @@ SE3 poseAt(const Trajectory& traj, TimeNs t) {
   if (traj.empty()) throw std::logic_error("poseAt on an empty trajectory");
   if (t <= traj.front().t) return traj.front().T_w_c;
   if (t >= traj.back().t) return traj.back().T_w_c;
-  const auto it = std::lower_bound(traj.begin(), traj.end(), t,
-                                   [](const StampedPose& s, TimeNs tt) { return s.t < tt; });
+  const auto it =
+      std::lower_bound(traj.begin(), traj.end(), t, [](const StampedPose& s, TimeNs tt) { return s.t < tt; });
   const StampedPose& b = *it;
   const StampedPose& a = *(it - 1);
   return interpolate(a.T_w_c, b.T_w_c, static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t));
@@ -139,7 +141,8 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   const auto wall0 = Clock::now();
   cfg.event_frame.validate();
   cfg.points.validate();
-  if (!seq.hasFrames()) throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
+  if (!seq.hasFrames())
+    throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
   const Trajectory gt = seq.groundTruth();
   if (gt.empty()) throw InputError((seq.dir() / "groundtruth.txt").string(), "empty ground truth");
   const Undistorter und(seq.camera());
@@ -160,15 +163,15 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   res.keyframes = 1;
   res.points_per_keyframe.push_back(static_cast<int>(tracker.numPoints()));
   res.trajectory.push_back({kf.t, kf.T_w_kf});
-  const TimeNs t_end = cfg.duration_s > 0 ? frames[0].t + fromSeconds(cfg.duration_s)
-                                          : std::numeric_limits<TimeNs>::max();
+  const TimeNs t_end =
+      cfg.duration_s > 0 ? frames[0].t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
 
   auto src = seq.openEvents();
   PacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events), cfg.event_frame.stride());
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;
-  SE3 T_ef_kf;        // current estimate
+  SE3 T_ef_kf;  // current estimate
   Vec6 nu = Vec6::Zero();
   // The last two tracked poses on this keyframe, for the constant-velocity prediction.
   SE3 T_prev;
@@ -201,8 +204,11 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
           const auto t0 = Clock::now();
           const FrameTrackResult fr = frame_tracker.track(img, T_f_kf, alpha, beta);
           res.frame_track_ms.push_back(msSince(t0));
-          if (fr.ok) T_w_kf_new = kf.T_w_kf * T_f_kf.inverse();
-          else res.failures.push_back({frames[f].t, "frame alignment failed (rmse " + std::to_string(fr.rmse) + "); keyframe keeps the event pose"});
+          if (fr.ok)
+            T_w_kf_new = kf.T_w_kf * T_f_kf.inverse();
+          else
+            res.failures.push_back({frames[f].t, "frame alignment failed (rmse " + std::to_string(fr.rmse) +
+                                                     "); keyframe keeps the event pose"});
         }
         const SE3 T_w_ef = kf.T_w_kf * T_ef_kf.inverse();
         const SE3 T_kfnew_kfold = T_w_kf_new.inverse() * kf.T_w_kf;
@@ -273,20 +279,27 @@ namespace {
 nlohmann::json stats(std::vector<double> v) {
   if (v.empty()) return nullptr;
   std::sort(v.begin(), v.end());
-  const auto pct = [&](double q) { return v[std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5))]; };
+  const auto pct = [&](double q) {
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5))];
+  };
   double sum = 0;
   for (double x : v) sum += x;
   return {{"median", pct(0.5)}, {"p95", pct(0.95)}, {"mean", sum / v.size()}, {"max", v.back()}};
 }
 }  // namespace
 
-void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r, const TrackOnlyConfig& cfg) {
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,
+                       const TrackOnlyConfig& cfg) {
   nlohmann::json j;
   j["mode"] = "track --depth-from-gt";
-  j["counts"] = {{"event_frames", r.event_frames}, {"tracked", r.tracked}, {"failures", r.failures.size()},
-                 {"keyframes", r.keyframes}, {"poses", r.trajectory.size()}};
+  j["counts"] = {{"event_frames", r.event_frames},
+                 {"tracked", r.tracked},
+                 {"failures", r.failures.size()},
+                 {"keyframes", r.keyframes},
+                 {"poses", r.trajectory.size()}};
   j["points_per_keyframe"] = r.points_per_keyframe;
-  j["timings_ms"] = {{"event_frame_build", stats(r.build_ms)}, {"track", stats(r.track_ms)},
+  j["timings_ms"] = {{"event_frame_build", stats(r.build_ms)},
+                     {"track", stats(r.track_ms)},
                      {"keyframe_frame_alignment", stats(r.frame_track_ms)}};
   j["wall_s"] = r.wall_s;
   j["sequence_s"] = r.sequence_s;
@@ -294,9 +307,13 @@ void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult&
   nlohmann::json fails = nlohmann::json::array();
   for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
   j["failures"] = fails;
-  j["config"] = {{"events_per_frame", cfg.event_frame.num_events}, {"overlap", cfg.event_frame.overlap},
-                 {"tile", cfg.points.tile}, {"point_fraction", cfg.points.fraction},
-                 {"max_points", cfg.points.max_points}, {"depth_noise", cfg.depth_noise}, {"seed", cfg.seed}};
+  j["config"] = {{"events_per_frame", cfg.event_frame.num_events},
+                 {"overlap", cfg.event_frame.overlap},
+                 {"tile", cfg.points.tile},
+                 {"point_fraction", cfg.points.fraction},
+                 {"max_points", cfg.points.max_points},
+                 {"depth_noise", cfg.depth_noise},
+                 {"seed", cfg.seed}};
   std::ofstream out(file);
   if (!out) throw InputError(file.string(), "cannot open for writing");
   out << j.dump(2) << "\n";

@@ -17,8 +17,8 @@
 namespace eds {
 
 struct KeyframePolicyConfig {
-  double max_point_drop = 0.25;      // new keyframe when points in view fall by this fraction
-  double max_rotation_deg = 10.0;    // ... or the rotation from the keyframe exceeds this
+  double max_point_drop = 0.25;         // new keyframe when points in view fall by this fraction
+  double max_rotation_deg = 10.0;       // ... or the rotation from the keyframe exceeds this
   double max_translation_ratio = 0.15;  // ... or translation / median scene depth exceeds this
 };
 
@@ -32,9 +32,9 @@ struct TrackOnlyConfig {
   // A new keyframe's pose: the event pose at its frame's time, refined by aligning the frame to the
   // previous keyframe (on by default; off = event poses only).
   bool refine_keyframes = true;
-  double depth_noise = 0.0;      // sigma of additive depth noise, as a fraction of the median depth
+  double depth_noise = 0.0;  // sigma of additive depth noise, as a fraction of the median depth
   std::uint64_t seed = 1;
-  double duration_s = 0.0;       // 0 = the whole sequence (from the first frame)
+  double duration_s = 0.0;          // 0 = the whole sequence (from the first frame)
   std::filesystem::path debug_dir;  // non-empty: write event frame | prediction PNGs there
 };
 
@@ -57,6 +57,7 @@ struct TrackOnlyResult {
 TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg);
 
 // summary.json of a run (counts, timings with median/p95, failures, real-time factor).
-void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r, const TrackOnlyConfig& cfg);
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,
+                       const TrackOnlyConfig& cfg);
 
 }  // namespace eds

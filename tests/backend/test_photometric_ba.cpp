@@ -160,7 +160,8 @@ TEST(PhotometricBA, RefinesPosesAndDepthsOfASimulatedPlane) {
   const auto poseError = [&](const std::vector<BaFrame>& fr) {
     double worst = 0;
     for (int f = 0; f < F; ++f)
-      worst = std::max(worst, (fr[f].T_w_c.translation() - s.motion.pose(s.frames.times[f]).translation()).norm());
+      worst = std::max(worst,
+                       (fr[f].T_w_c.translation() - s.motion.pose(s.frames.times[f]).translation()).norm());
     return worst;
   };
   const double d0 = depthError(pts), p0 = poseError(frames);
@@ -172,13 +173,16 @@ TEST(PhotometricBA, RefinesPosesAndDepthsOfASimulatedPlane) {
   int nr = 0;
   for (const BaPoint& p : pts)
     if (!p.outlier && !p.targets.empty())
-      ratio += 1.0 / p.inv_depth / s.frames.depths[p.host].at<float>(static_cast<int>(p.v), static_cast<int>(p.u)), ++nr;
+      ratio +=
+          1.0 / p.inv_depth / s.frames.depths[p.host].at<float>(static_cast<int>(p.v), static_cast<int>(p.u)),
+          ++nr;
   std::printf("[ ba ] mean depth ratio %.4f over %d points\n", ratio / nr, nr);
   EXPECT_NEAR(ratio / nr, 1.0, 0.01);
-  std::printf("[ ba ] %zu points, %d residuals, rmse %.4f -> %.4f, depth error %.1f%% -> %.1f%%, worst position "
-              "error %.2f mm -> %.2f mm, %d outlier observations\n",
-              pts.size(), st.residuals, st.initial_rmse, st.final_rmse, d0 * 100, d1 * 100, p0 * 1e3, p1 * 1e3,
-              st.outliers_removed);
+  std::printf(
+      "[ ba ] %zu points, %d residuals, rmse %.4f -> %.4f, depth error %.1f%% -> %.1f%%, worst position "
+      "error %.2f mm -> %.2f mm, %d outlier observations\n",
+      pts.size(), st.residuals, st.initial_rmse, st.final_rmse, d0 * 100, d1 * 100, p0 * 1e3, p1 * 1e3,
+      st.outliers_removed);
   EXPECT_LT(st.final_rmse, st.initial_rmse * 0.5);
   EXPECT_LT(d1, d0 / 3);
   EXPECT_LT(p1, 2e-3);

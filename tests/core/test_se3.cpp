@@ -76,9 +76,11 @@ TEST(SO3, LeftAndRightJacobiansMatchNumericDifferences) {
     for (int i = 0; i < 3; ++i) {
       const Vec3 d = Vec3::Unit(i) * h;
       Jl_num.col(i) = ((SO3::exp(w + d) * SO3::exp(w).inverse()).log() -
-                       (SO3::exp(w - d) * SO3::exp(w).inverse()).log()) / (2 * h);
+                       (SO3::exp(w - d) * SO3::exp(w).inverse()).log()) /
+                      (2 * h);
       Jr_num.col(i) = ((SO3::exp(w).inverse() * SO3::exp(w + d)).log() -
-                       (SO3::exp(w).inverse() * SO3::exp(w - d)).log()) / (2 * h);
+                       (SO3::exp(w).inverse() * SO3::exp(w - d)).log()) /
+                      (2 * h);
     }
     const Mat3 Jl = SO3::leftJacobian(w), Jr = SO3::rightJacobian(w);
     EXPECT_LT((Jl - Jl_num).norm() / Jl.norm(), 1e-7);

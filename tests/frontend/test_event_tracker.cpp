@@ -49,7 +49,8 @@ TEST(EventFrame, GaussianWeightsBilinearVotesMedianTimeUnitNorm) {
   cfg.blur = false;
   EventFrameBuilder builder(und, cfg);
   EventArray ev;
-  for (int k = 0; k < 5; ++k) ev.push_back(1000 + 10 * k, static_cast<std::uint16_t>(50 + k), 60, k % 2 ? -1 : 1);
+  for (int k = 0; k < 5; ++k)
+    ev.push_back(1000 + 10 * k, static_cast<std::uint16_t>(50 + k), 60, k % 2 ? -1 : 1);
   EventFrame ef;
   builder.build(ev, 0, ef);
   EXPECT_EQ(ef.t, 1020);

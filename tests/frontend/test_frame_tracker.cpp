@@ -99,12 +99,12 @@ TEST(FrameTracker, RecoversAKnownMotionOfAPlane) {
     }
   cv::remap(img, frame, mx, my, cv::INTER_LINEAR, cv::BORDER_REFLECT);
   frame = frame * 1.1 + 0.02;  // an exposure change: the affine brightness must absorb it
-  SE3 T;  // from identity: 2.5 px and ~1 deg away
+  SE3 T;                       // from identity: 2.5 px and ~1 deg away
   double a = 1, b = 0;
   const FrameTrackResult res = ft.track(frame, T, a, b);
   EXPECT_TRUE(res.ok);
-  std::printf("[ frame tracker ] rmse %.4f, %d residuals, t err %.3f mm, a %.3f b %.3f\n", res.rmse, res.residuals,
-              (T.translation() - T_f_kf.translation()).norm() * 1e3, a, b);
+  std::printf("[ frame tracker ] rmse %.4f, %d residuals, t err %.3f mm, a %.3f b %.3f\n", res.rmse,
+              res.residuals, (T.translation() - T_f_kf.translation()).norm() * 1e3, a, b);
   EXPECT_LT((T.translation() - T_f_kf.translation()).norm(), 2e-3);
   EXPECT_LT((T.so3().inverse() * T_f_kf.so3()).angle() * 180 / M_PI, 0.05);
   EXPECT_NEAR(a, 1.1, 0.03);

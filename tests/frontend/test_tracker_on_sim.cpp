@@ -53,8 +53,9 @@ TEST(EventTrackerOnSim, RecoversThePoseFromOneDegreeAndOneCentimetreOff) {
   PointSelectionConfig pcfg;
   for (const cv::Point& p : selectPoints(kf.grad_x, kf.grad_y, pcfg)) {
     const float z = sink.first_depth.at<float>(p.y, p.x);
-    if (z > 0) kf.points.push_back({static_cast<float>(p.x), static_cast<float>(p.y), kf.grad_x.at<float>(p.y, p.x),
-                                    kf.grad_y.at<float>(p.y, p.x), 1.0 / z});
+    if (z > 0)
+      kf.points.push_back({static_cast<float>(p.x), static_cast<float>(p.y), kf.grad_x.at<float>(p.y, p.x),
+                           kf.grad_y.at<float>(p.y, p.x), 1.0 / z});
   }
   ASSERT_GT(kf.points.size(), 1000u);
 
@@ -83,8 +84,8 @@ TEST(EventTrackerOnSim, RecoversThePoseFromOneDegreeAndOneCentimetreOff) {
   const SE3 err = T * T_ef_kf_true.inverse();
   const double rot_deg = err.so3().angle() * 180.0 / M_PI;
   const double trans_mm = (T.inverse().translation() - T_ef_kf_true.inverse().translation()).norm() * 1000.0;
-  std::printf("[ tracker on sim ] events %.1f..%.1f ms (%zu total), ", toSeconds(ef.t_first) * 1e3, toSeconds(ef.t_last) * 1e3,
-              sink.events.size());
+  std::printf("[ tracker on sim ] events %.1f..%.1f ms (%zu total), ", toSeconds(ef.t_first) * 1e3,
+              toSeconds(ef.t_last) * 1e3, sink.events.size());
   std::printf("%zu points, correlation %.3f, error %.4f deg, %.3f mm (motion %.2f deg, %.1f mm)\n",
               kf.points.size(), res2.correlation, rot_deg, trans_mm, T_ef_kf_true.so3().angle() * 180 / M_PI,
               T_ef_kf_true.translation().norm() * 1000);

@@ -1,9 +1,9 @@
 // Bad input must give an InputError naming the file (and the line where there is one): never a crash,
 // a hang or a silently wrong result. The asan preset runs these too.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <fstream>
-#include <zlib.h>
 
 #include "core/error.hpp"
 #include "io/ecd_events.hpp"

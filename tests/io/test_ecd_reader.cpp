@@ -1,8 +1,7 @@
 #include <gtest/gtest.h>
-
-#include <fstream>
 #include <zlib.h>
 
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.hpp"
@@ -160,7 +159,8 @@ TEST(MergedStream, EventsNeverPassTheNextFrame) {
   EventArray chunk;
   std::size_t idx = 0, events = 0, frames = 0;
   TimeNs last_frame = -1;
-  for (auto kind = stream.next(chunk, idx); kind != MergedStream::Kind::kEnd; kind = stream.next(chunk, idx)) {
+  for (auto kind = stream.next(chunk, idx); kind != MergedStream::Kind::kEnd;
+       kind = stream.next(chunk, idx)) {
     if (kind == MergedStream::Kind::kFrame) {
       EXPECT_EQ(idx, frames);
       last_frame = seq.frames()[idx].t;
@@ -188,10 +188,11 @@ TEST(Sequence, Hdf5EventsWithKalibrCalibration) {
   EventArray ev;
   for (int i = 0; i < 5000; ++i) ev.push_back(1'000'000LL * i, i % 346, i % 260, i % 2 ? 1 : -1);
   writeHdf5Events((dir / "events.h5").string(), ev, 0);
-  std::ofstream(dir / "camchain.yaml") << "cam0:\n  camera_model: pinhole\n  intrinsics: [180.0, 181.0, 170.0, 128.0]\n"
-                                          "  distortion_model: equidistant\n"
-                                          "  distortion_coeffs: [0.05, -0.02, 0.004, -0.001]\n"
-                                          "  resolution: [346, 260]\n";
+  std::ofstream(dir / "camchain.yaml")
+      << "cam0:\n  camera_model: pinhole\n  intrinsics: [180.0, 181.0, 170.0, 128.0]\n"
+         "  distortion_model: equidistant\n"
+         "  distortion_coeffs: [0.05, -0.02, 0.004, -0.001]\n"
+         "  resolution: [346, 260]\n";
   const Sequence seq(dir);
   EXPECT_EQ(seq.width(), 346);
   EXPECT_EQ(seq.camera().distortion, Distortion::kEquidistant);

@@ -25,8 +25,8 @@ class TempDir {
  public:
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("eds_h5_" + std::to_string(::getpid()) + "_" +
-                                        info->test_suite_name() + "_" + info->name());
+    dir_ = fs::temp_directory_path() /
+           ("eds_h5_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -50,8 +50,8 @@ EventArray makeEvents(std::size_t n, std::uint32_t seed, TimeNs t0 = 0) {
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t r = rng();
     t += 1000 * ((r % 97 == 0) ? 2500 + r % 4000 : r % 4);
-    ev.push_back(t, static_cast<std::uint16_t>(rng() % 640),
-                 static_cast<std::uint16_t>(rng() % 480), (rng() & 1) ? 1 : -1);
+    ev.push_back(t, static_cast<std::uint16_t>(rng() % 640), static_cast<std::uint16_t>(rng() % 480),
+                 (rng() & 1) ? 1 : -1);
   }
   return ev;
 }
@@ -83,8 +83,7 @@ class RawFile {
     const hsize_t dims[2] = {rank == 2 ? values.size() / 2 : values.size(), 2};
     const hid_t space = H5Screate_simple(rank, dims, nullptr);
     const hid_t ds = H5Dcreate2(file_, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (!values.empty())
-      H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+    if (!values.empty()) H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
     H5Dclose(ds);
     H5Sclose(space);
   }
@@ -102,8 +101,7 @@ class RawFile {
 };
 
 // Asserts that fn throws InputError whose message names the file and contains `part`.
-void expectInputError(const std::function<void()>& fn, const std::string& file,
-                      const std::string& part) {
+void expectInputError(const std::function<void()>& fn, const std::string& file, const std::string& part) {
   try {
     fn();
     ADD_FAILURE() << "no InputError for " << file << " (expected '" << part << "')";
@@ -125,10 +123,10 @@ unsigned firstFilter(const std::string& path, const char* dataset) {
   const hid_t dcpl = H5Dget_create_plist(ds);
   unsigned flags = 0;
   std::size_t n = 0;
-  const H5Z_filter_t last = H5Pget_nfilters(dcpl) > 0
-                                ? H5Pget_filter2(dcpl, H5Pget_nfilters(dcpl) - 1, &flags, &n,
-                                                 nullptr, 0, nullptr, nullptr)
-                                : H5Z_FILTER_NONE;
+  const H5Z_filter_t last =
+      H5Pget_nfilters(dcpl) > 0
+          ? H5Pget_filter2(dcpl, H5Pget_nfilters(dcpl) - 1, &flags, &n, nullptr, 0, nullptr, nullptr)
+          : H5Z_FILTER_NONE;
   H5Pclose(dcpl);
   H5Dclose(ds);
   H5Fclose(file);

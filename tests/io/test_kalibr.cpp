@@ -16,9 +16,8 @@ namespace fs = std::filesystem;
 class KalibrTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("eds_kalibr_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("eds_kalibr_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override {
@@ -128,8 +127,7 @@ TEST_F(KalibrTest, RadtanWithK3) {
 TEST_F(KalibrTest, MissingFile) { expectError((dir_ / "absent.yaml").string(), "does not exist"); }
 
 TEST_F(KalibrTest, MalformedYamlReportsLine) {
-  const std::string path =
-      write("bad.yaml", "cam0:\n  intrinsics: [1, 2, 3, 4\n  resolution: [3\n");
+  const std::string path = write("bad.yaml", "cam0:\n  intrinsics: [1, 2, 3, 4\n  resolution: [3\n");
   expectError(path, "malformed YAML");
   const std::string extra =
       write("extra.yaml", "cam0:\n  camera_model: pinhole\n  intrinsics: [1, 2, 3, 4]]\n");

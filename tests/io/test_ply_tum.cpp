@@ -21,7 +21,9 @@ TEST(Ply, RoundTripAndHeaderIsStandard) {
   EXPECT_EQ(std::filesystem::file_size(dir / "map.ply"),
             std::string("ply\nformat binary_little_endian 1.0\ncomment written by eds\nelement vertex 100\n"
                         "property float x\nproperty float y\nproperty float z\nproperty float intensity\n"
-                        "end_header\n").size() + 100 * 16);
+                        "end_header\n")
+                    .size() +
+                100 * 16);
   const PointCloud back = readPly(dir / "map.ply");
   ASSERT_EQ(back.xyz.size(), 100u);
   EXPECT_EQ(back.xyz[57], cloud.xyz[57]);

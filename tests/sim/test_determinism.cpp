@@ -56,7 +56,8 @@ TEST(SimulatorDeterminism, SameSeedSameBytesDifferentSeedDifferentNoise) {
   ASSERT_GT(a.size(), 10000u);
   EXPECT_EQ(a, b);
   EXPECT_NE(a, c);
-  EXPECT_EQ(slurp(base / "a" / "images" / "frame_00000002.png"), slurp(base / "c" / "images" / "frame_00000002.png"))
+  EXPECT_EQ(slurp(base / "a" / "images" / "frame_00000002.png"),
+            slurp(base / "c" / "images" / "frame_00000002.png"))
       << "frames do not depend on the event noise seed";
   // The noise changes the events but not their overall amount much.
   const double ratio = static_cast<double>(c.size()) / static_cast<double>(a.size());

@@ -76,9 +76,10 @@ TEST(Simulator, ReproducesEsimOnTheSharedPosterSequence) {
   const double ratio = static_cast<double>(ours.total) / static_cast<double>(esim.total);
   const double c_time = correlation(ours.per_window, esim.per_window);
   const double c_pixel = correlation(ours.per_pixel, esim.per_pixel);
-  std::printf("[ esim check ] ours %zu vs esim %zu events (ratio %.4f), per-100ms corr %.4f, per-pixel corr %.4f, "
-              "%zu renders in %.1f s\n",
-              ours.total, esim.total, ratio, c_time, c_pixel, st.renders, st.wall_s);
+  std::printf(
+      "[ esim check ] ours %zu vs esim %zu events (ratio %.4f), per-100ms corr %.4f, per-pixel corr %.4f, "
+      "%zu renders in %.1f s\n",
+      ours.total, esim.total, ratio, c_time, c_pixel, st.renders, st.wall_s);
   EXPECT_EQ(esim.total, 4'908'566u);
   EXPECT_NEAR(ratio, 1.0, 0.10);
   EXPECT_GE(c_time, 0.95);

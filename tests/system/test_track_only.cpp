@@ -27,9 +27,10 @@ TEST(TrackOnly, EsimFirstSecondsWithTrueDepth) {
   const eval::AteResult first = eval::evaluateAte(r.trajectory, gt, ec);
   ec.align_frames = -1;
   const eval::AteResult all = eval::evaluateAte(r.trajectory, gt, ec);
-  std::printf("[ track 1.5 s ] se3(first pose): ATE %.3f cm, rot %.3f deg; se3(all): ATE %.3f cm, rot %.3f deg; "
-              "coverage %.1f %%\n",
-              first.trans.rmse * 100, first.rot.rmse, all.trans.rmse * 100, all.rot.rmse, first.coverage * 100);
+  std::printf(
+      "[ track 1.5 s ] se3(first pose): ATE %.3f cm, rot %.3f deg; se3(all): ATE %.3f cm, rot %.3f deg; "
+      "coverage %.1f %%\n",
+      first.trans.rmse * 100, first.rot.rmse, all.trans.rmse * 100, all.rot.rmse, first.coverage * 100);
   EXPECT_LE(first.trans.rmse, 0.010);
   EXPECT_LE(first.rot.rmse, 0.5);
   EXPECT_LE(all.trans.rmse, 0.010);
