@@ -9,5 +9,6 @@ void addInfoCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
 void addSimulateCommand(CLI::App& app);
 void addTrackCommand(CLI::App& app);
+void addRunCommand(CLI::App& app);
 
 }  // namespace eds::app

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   eds::app::addEvalCommand(app);
   eds::app::addSimulateCommand(app);
   eds::app::addTrackCommand(app);
+  eds::app::addRunCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

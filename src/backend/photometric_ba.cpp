@@ -71,7 +71,41 @@ bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& 
   return true;
 }
 
-BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoint>& points) const {
+Eigen::VectorXd BaPrior::delta(const std::vector<BaFrame>& fr) const {
+  Eigen::VectorXd x(8 * frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const BaFrame& f = fr.at(frames[i]);
+    x.segment<6>(8 * i) = (f.T_w_c * T0[i].inverse()).log();
+    x[8 * i + 6] = f.a - a0[i];
+    x[8 * i + 7] = f.b - b0[i];
+  }
+  return x;
+}
+
+double BaPrior::energy(const std::vector<BaFrame>& fr) const {
+  if (empty()) return 0.0;
+  const Eigen::VectorXd x = delta(fr);
+  return b.dot(x) + 0.5 * x.dot(H * x);
+}
+
+void BaPrior::eraseFrameIndex(int removed) {
+  for (int& f : frames) {
+    if (f == removed) throw std::logic_error("BaPrior: erasing a frame the prior still holds");
+    if (f > removed) --f;
+  }
+}
+
+// Normal equations of the photometric terms with the points kept apart (one inverse depth each), so
+// that they can be eliminated by the Schur complement.
+struct NormalEquations {
+  Eigen::MatrixXd Hff;
+  Eigen::VectorXd bf;
+  std::vector<double> Hpp, bp;
+  std::vector<Eigen::VectorXd> Hfp;
+};
+
+BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoint>& points,
+                                const BaPrior* prior) const {
   BaStats stats;
   const int F = static_cast<int>(frames.size());
   // Frame parameter index (-1 for fixed frames): the system only holds the free ones.
@@ -81,6 +115,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     if (!frames[f].fixed) slot[f] = nf++;
   const int dim = nf * kFrameParams;
   const double d = cfg_.huber, c2 = cfg_.grad_weight_c * cfg_.grad_weight_c;
+  if (prior && prior->empty()) prior = nullptr;
 
   // Gradient weights per point and pattern pixel, from the host image (fixed during the solve).
   const auto gradWeight = [&](const BaPoint& p, int k) {
@@ -95,6 +130,10 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     Eigen::Matrix<double, 8, 1> r;
     for (const BaPoint& p : pts) {
       if (p.outlier) continue;
+      if (p.prior_weight > 0) {
+        const double e = p.inv_depth - p.prior_inv_depth;
+        cost += 0.5 * p.prior_weight * e * e;
+      }
       for (int t : p.targets) {
         if (!evaluate(fr, p, t, r, nullptr)) continue;
         for (int k = 0; k < 8; ++k) {
@@ -104,6 +143,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         }
       }
     }
+    if (prior) cost += prior->energy(fr);
     if (rmse) *rmse = n ? std::sqrt(ss / n) : 0.0;
     if (count) *count = n;
     return cost;
@@ -113,59 +153,36 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   double lambda = cfg_.lambda_initial;
   Eigen::MatrixXd S(dim, dim);
   Eigen::VectorXd s(dim);
-  std::vector<double> Hpp(points.size()), bp(points.size());
-  std::vector<Eigen::VectorXd> Hfp(points.size());
-  Eigen::Matrix<double, 8, 1> r;
-  Eigen::Matrix<double, 8, 17> J;
+  NormalEquations ne;
   for (int it = 0; it < cfg_.iterations; ++it, ++stats.iterations) {
-    // Normal equations, points kept apart for the Schur complement.
-    Eigen::MatrixXd Hff = Eigen::MatrixXd::Zero(dim, dim);
-    Eigen::VectorXd bf = Eigen::VectorXd::Zero(dim);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const BaPoint& p = points[i];
-      Hpp[i] = bp[i] = 0;
-      Hfp[i] = Eigen::VectorXd::Zero(dim);
-      if (p.outlier) continue;
-      for (int t : p.targets) {
-        if (!evaluate(frames, p, t, r, &J)) continue;
-        const int sh = slot[p.host], st = slot[t];
-        for (int k = 0; k < 8; ++k) {
-          const double a = std::abs(r[k]);
-          const double w = gradWeight(p, k) * (a <= d ? 1.0 : d / a);
-          const Eigen::Matrix<double, 1, 8> Jh = J.block<1, 8>(k, 0), Jt = J.block<1, 8>(k, 8);
-          const double Jr = J(k, 16);
-          if (sh >= 0) {
-            Hff.block<8, 8>(sh * 8, sh * 8) += w * Jh.transpose() * Jh;
-            bf.segment<8>(sh * 8) += w * r[k] * Jh.transpose();
-            Hfp[i].segment<8>(sh * 8) += w * Jr * Jh.transpose();
-          }
-          if (st >= 0) {
-            Hff.block<8, 8>(st * 8, st * 8) += w * Jt.transpose() * Jt;
-            bf.segment<8>(st * 8) += w * r[k] * Jt.transpose();
-            Hfp[i].segment<8>(st * 8) += w * Jr * Jt.transpose();
-          }
-          if (sh >= 0 && st >= 0) {
-            Hff.block<8, 8>(sh * 8, st * 8) += w * Jh.transpose() * Jt;
-            Hff.block<8, 8>(st * 8, sh * 8) += w * Jt.transpose() * Jh;
-          }
-          Hpp[i] += w * Jr * Jr;
-          bp[i] += w * Jr * r[k];
+    accumulate(frames, points, slot, dim, ne);
+    if (prior) {
+      // Gradient b + Hx at the current state; Hessian blocks between free frames only.
+      const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);
+      const int np = static_cast<int>(prior->frames.size());
+      for (int i = 0; i < np; ++i) {
+        const int si = slot[prior->frames[i]];
+        if (si < 0) continue;
+        ne.bf.segment<8>(si * 8) += g.segment<8>(8 * i);
+        for (int j = 0; j < np; ++j) {
+          const int sj = slot[prior->frames[j]];
+          if (sj >= 0) ne.Hff.block<8, 8>(si * 8, sj * 8) += prior->H.block<8, 8>(8 * i, 8 * j);
         }
       }
     }
     bool accepted = false;
     for (int tries = 0; tries < 5 && !accepted; ++tries) {
       // Levenberg damping on every diagonal entry, then the Schur complement over the points.
-      S = Hff;
+      S = ne.Hff;
       S.diagonal() *= 1.0 + lambda;
       S.diagonal().array() += 1e-9;
-      s = bf;
+      s = ne.bf;
       std::vector<double> hpp_d(points.size());
       for (std::size_t i = 0; i < points.size(); ++i) {
-        hpp_d[i] = Hpp[i] * (1.0 + lambda) + 1e-12;
-        if (Hpp[i] <= 0) continue;
-        S.noalias() -= Hfp[i] * Hfp[i].transpose() / hpp_d[i];
-        s.noalias() -= Hfp[i] * (bp[i] / hpp_d[i]);
+        hpp_d[i] = ne.Hpp[i] * (1.0 + lambda) + 1e-12;
+        if (ne.Hpp[i] <= 0) continue;
+        S.noalias() -= ne.Hfp[i] * ne.Hfp[i].transpose() / hpp_d[i];
+        s.noalias() -= ne.Hfp[i] * (ne.bp[i] / hpp_d[i]);
       }
       const Eigen::VectorXd df = dim > 0 ? Eigen::VectorXd(-S.ldlt().solve(s)) : Eigen::VectorXd();
       if (!df.allFinite()) {
@@ -182,8 +199,8 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         f_new[f].b += x[7];
       }
       for (std::size_t i = 0; i < points.size(); ++i) {
-        if (Hpp[i] <= 0) continue;
-        const double dr = -(bp[i] + Hfp[i].dot(df)) / hpp_d[i];
+        if (ne.Hpp[i] <= 0) continue;
+        const double dr = -(ne.bp[i] + (dim > 0 ? ne.Hfp[i].dot(df) : 0.0)) / hpp_d[i];
         p_new[i].inv_depth = std::max(1e-4, points[i].inv_depth + dr);
       }
       const double cost_new = totalCost(f_new, p_new, nullptr, nullptr);
@@ -202,6 +219,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     if (!accepted) break;
   }
   // Outliers: observations whose pattern does not match any more (occlusion, wrong depth).
+  Eigen::Matrix<double, 8, 1> r;
   for (BaPoint& p : points) {
     if (p.outlier) continue;
     std::vector<int> keep;
@@ -216,6 +234,113 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   }
   totalCost(frames, points, &stats.final_rmse, &stats.residuals);
   return stats;
+}
+
+void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                               const std::vector<int>& slot, int dim, NormalEquations& ne,
+                               int only_host) const {
+  const double d = cfg_.huber, c2 = cfg_.grad_weight_c * cfg_.grad_weight_c;
+  ne.Hff = Eigen::MatrixXd::Zero(dim, dim);
+  ne.bf = Eigen::VectorXd::Zero(dim);
+  ne.Hpp.assign(points.size(), 0.0);
+  ne.bp.assign(points.size(), 0.0);
+  ne.Hfp.resize(points.size());
+  Eigen::Matrix<double, 8, 1> r;
+  Eigen::Matrix<double, 8, 17> J;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const BaPoint& p = points[i];
+    ne.Hfp[i] = Eigen::VectorXd::Zero(dim);
+    if (p.outlier || (only_host >= 0 && p.host != only_host)) continue;
+    if (p.prior_weight > 0) {
+      ne.Hpp[i] += p.prior_weight;
+      ne.bp[i] += p.prior_weight * (p.inv_depth - p.prior_inv_depth);
+    }
+    for (int t : p.targets) {
+      if (!evaluate(frames, p, t, r, &J)) continue;
+      const int sh = slot[p.host], st = slot[t];
+      for (int k = 0; k < 8; ++k) {
+        double gx, gy;
+        sampleBilinear(frames[p.host].image, p.u + kPattern[k][0], p.v + kPattern[k][1], gx, gy);
+        const double a = std::abs(r[k]);
+        const double w = c2 / (c2 + gx * gx + gy * gy) * (a <= d ? 1.0 : d / a);
+        const Eigen::Matrix<double, 1, 8> Jh = J.block<1, 8>(k, 0), Jt = J.block<1, 8>(k, 8);
+        const double Jr = J(k, 16);
+        if (sh >= 0) {
+          ne.Hff.block<8, 8>(sh * 8, sh * 8) += w * Jh.transpose() * Jh;
+          ne.bf.segment<8>(sh * 8) += w * r[k] * Jh.transpose();
+          ne.Hfp[i].segment<8>(sh * 8) += w * Jr * Jh.transpose();
+        }
+        if (st >= 0) {
+          ne.Hff.block<8, 8>(st * 8, st * 8) += w * Jt.transpose() * Jt;
+          ne.bf.segment<8>(st * 8) += w * r[k] * Jt.transpose();
+          ne.Hfp[i].segment<8>(st * 8) += w * Jr * Jt.transpose();
+        }
+        if (sh >= 0 && st >= 0) {
+          ne.Hff.block<8, 8>(sh * 8, st * 8) += w * Jh.transpose() * Jt;
+          ne.Hff.block<8, 8>(st * 8, sh * 8) += w * Jt.transpose() * Jh;
+        }
+        ne.Hpp[i] += w * Jr * Jr;
+        ne.bp[i] += w * Jr * r[k];
+      }
+    }
+  }
+}
+
+BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                                   const BaPrior* prior, int m) const {
+  const int F = static_cast<int>(frames.size());
+  if (m < 0 || m >= F) throw std::out_of_range("marginalize: no such frame");
+  // Every frame is a variable here (fixed or not): the prior must hold the information about all of
+  // them, whichever the window holds fixed later.
+  std::vector<int> slot(F);
+  for (int f = 0; f < F; ++f) slot[f] = f;
+  const int dim = F * kFrameParams;
+  NormalEquations ne;
+  accumulate(frames, points, slot, dim, ne, m);
+  Eigen::MatrixXd H = ne.Hff;
+  Eigen::VectorXd b = ne.bf;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (ne.Hpp[i] <= 1e-12) continue;
+    H.noalias() -= ne.Hfp[i] * ne.Hfp[i].transpose() / ne.Hpp[i];
+    b.noalias() -= ne.Hfp[i] * (ne.bp[i] / ne.Hpp[i]);
+  }
+  if (prior && !prior->empty()) {
+    const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);
+    const int np = static_cast<int>(prior->frames.size());
+    for (int i = 0; i < np; ++i) {
+      const int si = prior->frames[i];
+      b.segment<8>(si * 8) += g.segment<8>(8 * i);
+      for (int j = 0; j < np; ++j)
+        H.block<8, 8>(si * 8, prior->frames[j] * 8) += prior->H.block<8, 8>(8 * i, 8 * j);
+    }
+  }
+  // Schur complement of frame m: its block is regularized slightly so that a frame seen by few
+  // residuals (or a gauge direction) does not blow up the inverse.
+  std::vector<int> keep;
+  for (int f = 0; f < F; ++f)
+    if (f != m) keep.push_back(f);
+  const int nk = static_cast<int>(keep.size());
+  Eigen::MatrixXd Hkk(8 * nk, 8 * nk), Hkm(8 * nk, 8);
+  Eigen::VectorXd bk(8 * nk);
+  for (int i = 0; i < nk; ++i) {
+    bk.segment<8>(8 * i) = b.segment<8>(8 * keep[i]);
+    Hkm.block<8, 8>(8 * i, 0) = H.block<8, 8>(8 * keep[i], 8 * m);
+    for (int j = 0; j < nk; ++j) Hkk.block<8, 8>(8 * i, 8 * j) = H.block<8, 8>(8 * keep[i], 8 * keep[j]);
+  }
+  Eigen::Matrix<double, 8, 8> Hmm = H.block<8, 8>(8 * m, 8 * m);
+  Hmm.diagonal().array() += 1e-9 + 1e-6 * Hmm.diagonal().array();
+  const Eigen::LDLT<Eigen::Matrix<double, 8, 8>> ldlt(Hmm);
+  BaPrior out;
+  out.frames = keep;
+  out.H = Hkk - Hkm * ldlt.solve(Hkm.transpose());
+  out.H = 0.5 * (out.H + out.H.transpose());
+  out.b = bk - Hkm * ldlt.solve(b.segment<8>(8 * m));
+  for (int f : keep) {
+    out.T0.push_back(frames[f].T_w_c);
+    out.a0.push_back(frames[f].a);
+    out.b0.push_back(frames[f].b);
+  }
+  return out;
 }
 
 }  // namespace eds

@@ -7,8 +7,11 @@
 // Levenberg damping; the points are eliminated by the Schur complement (each has one parameter), so a
 // step costs O(residuals) plus a dense solve of 8 parameters per keyframe.
 //
-// Gauge: the first keyframe (pose and brightness) is held fixed; monocular scale is left to the
-// damping and to the caller (a marginalization prior is the next step, see issue #5).
+// Gauge: frames marked `fixed` are held (the window holds its oldest keyframe). Information of
+// keyframes and points that leave the window is kept as a Gaussian prior (BaPrior, from marginalize()),
+// which is what holds the monocular scale and keeps drift down. The prior's residual Jacobians are
+// taken at the current estimate, not at a first estimate (DSO's FEJ): the window is short and the
+// estimates move little once a keyframe is old enough to be marginalized.
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -38,6 +41,25 @@ struct BaPoint {
   double inv_depth = 1.0;
   std::vector<int> targets;  // frames it is observed in (not the host)
   bool outlier = false;
+  // Optional Gaussian prior on the inverse depth, ½ w (ρ − ρ0)²: the bootstrap uses it while the
+  // baseline is too short for depth to be observable.
+  double prior_weight = 0, prior_inv_depth = 1.0;
+};
+
+// A Gaussian prior over some frames' parameters, E(x) = bᵀx + ½ xᵀHx with, per frame, the 8-vector
+// x = (log(T_w_c · T0⁻¹), a − a0, b − b0) (the same left perturbation as the solve).
+struct BaPrior {
+  std::vector<int> frames;  // indices into the frame vector
+  std::vector<SE3> T0;
+  std::vector<double> a0, b0;
+  Eigen::MatrixXd H;
+  Eigen::VectorXd b;
+  bool empty() const { return frames.empty(); }
+  // x of every prior frame, stacked.
+  Eigen::VectorXd delta(const std::vector<BaFrame>& frames_now) const;
+  double energy(const std::vector<BaFrame>& frames_now) const;
+  // Re-indexes after frame `removed` was erased from the frame vector (indices above it shift down).
+  void eraseFrameIndex(int removed);
 };
 
 struct BaStats {
@@ -47,10 +69,20 @@ struct BaStats {
   int outliers_removed = 0;
 };
 
+struct NormalEquations;  // defined in photometric_ba.cpp
+
 class PhotometricBA {
  public:
   PhotometricBA(const CameraModel& pinhole, BaConfig cfg);
-  BaStats optimize(std::vector<BaFrame>& frames, std::vector<BaPoint>& points) const;
+  BaStats optimize(std::vector<BaFrame>& frames, std::vector<BaPoint>& points,
+                   const BaPrior* prior = nullptr) const;
+
+  // Marginalizes frame m: the residuals of the points hosted in m (linearized at the current state,
+  // points eliminated by the Schur complement) and the existing prior become a prior over every other
+  // frame. The caller then erases frame m, its points and the observations of other points in m
+  // (those are dropped, as DSO does), and calls prior.eraseFrameIndex(m).
+  BaPrior marginalize(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                      const BaPrior* prior, int m) const;
 
   // For tests: the 8 pattern residuals of point p in target t and their Jacobians with respect to
   // (host pose ξ_h (6), host a, b, target pose ξ_t (6), target a, b, inverse depth): 8 x 17.
@@ -60,6 +92,11 @@ class PhotometricBA {
                 Eigen::Matrix<double, 8, 1>& r, Eigen::Matrix<double, 8, 17>* J) const;
 
  private:
+  // Accumulates the normal equations of the photometric terms (and point priors); frames with
+  // slot < 0 are constant. only_host >= 0: only the points hosted in that frame.
+  void accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                  const std::vector<int>& slot, int dim, NormalEquations& ne, int only_host = -1) const;
+
   CameraModel cam_;
   BaConfig cfg_;
 };

@@ -1,0 +1,73 @@
+// `eds run SEQUENCE --frames-only --out DIR`: visual odometry on a sequence.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "system/odometry.hpp"
+
+namespace eds::app {
+
+namespace {
+
+struct RunArgs {
+  std::string sequence, out = "run_out";
+  bool frames_only = false, no_marginalization = false;
+  OdometryConfig cfg;
+};
+
+void runRun(RunArgs& a) {
+  if (!a.frames_only)
+    throw std::invalid_argument(
+        "eds run: the event front-end is not joined to the mapping yet (issue #6); use --frames-only, or "
+        "`eds track --depth-from-gt` for event tracking with known depth");
+  if (a.no_marginalization) a.cfg.backend.marginalize = false;
+  const Sequence seq(a.sequence);
+  const OdometryResult r = runOdometry(seq, a.cfg);
+  writeOdometryOutputs(a.out, r, a.cfg);
+  if (!r.initialized)
+    std::printf("never initialized over %zu frames (not enough texture or parallax)\n", r.frames_in);
+  else
+    std::printf(
+        "initialized at %.2f s after %d frames; %zu poses, %zu keyframes, %zu map points, %zu failures\n",
+        toSeconds(r.init_t - r.first_t), r.init_frames, r.frames.size(), r.keyframes.size(), r.map.size(),
+        r.failures.size());
+  std::printf("%.2f s wall for %.2f s of sequence (real-time factor %.2f)\n", r.wall_s, r.sequence_s,
+              r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
+  std::printf("wrote %s/{trajectory_frames.txt, keyframes.txt, map.ply, summary.json}\n", a.out.c_str());
+}
+
+}  // namespace
+
+void addRunCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("run", "Run the odometry on a sequence");
+  auto a = std::make_shared<RunArgs>();
+  cmd->add_option("sequence", a->sequence, "Sequence folder")->required();
+  cmd->add_flag("--frames-only", a->frames_only,
+                "Frames alone: bootstrap, frame tracking, mapping, back-end");
+  cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
+  cmd->add_option("--frame-rate", a->cfg.frame_rate, "Keep the frames nearest this rate, Hz (0: all)")
+      ->capture_default_str();
+  cmd->add_option("--start", a->cfg.start_s, "Seconds to skip from the first frame")->capture_default_str();
+  cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process (0: to the end)")
+      ->capture_default_str();
+  cmd->add_option("--window", a->cfg.backend.window, "Keyframes in the back-end window")
+      ->capture_default_str();
+  cmd->add_option("--points-per-keyframe", a->cfg.backend.points_per_keyframe,
+                  "Points each keyframe hosts in the back-end")
+      ->capture_default_str();
+  cmd->add_option("--init-parallax", a->cfg.bootstrap.min_parallax_px,
+                  "Bootstrap: RMS pixel parallax of translation needed to initialize")
+      ->capture_default_str();
+  cmd->add_option("--init-depth-prior", a->cfg.bootstrap.depth_prior_weight,
+                  "Bootstrap: weight of the prior holding inverse depths at 1 while parallax is short")
+      ->capture_default_str();
+  cmd->add_option("--ba-iterations", a->cfg.backend.ba.iterations, "Back-end iterations per keyframe")
+      ->capture_default_str();
+  cmd->add_flag("--no-marginalization", a->no_marginalization,
+                "Drop old keyframes' information instead of keeping it as a prior");
+  cmd->callback([a] { runRun(*a); });
+}
+
+}  // namespace eds::app

@@ -1,0 +1,80 @@
+#pragma once
+// The back-end's sliding window (paper §3.3, DSO): up to `window` keyframes with the points they host,
+// optimized together by the photometric bundle adjustment. When the window is full the oldest keyframe
+// is marginalized: its points' residuals and the old prior become a Gaussian prior on the keyframes
+// that stay (Schur complement), so the information that holds scale and drift in check is not thrown
+// away. The oldest keyframe in the window is held fixed (gauge).
+#include <vector>
+
+#include "backend/photometric_ba.hpp"
+#include "core/camera.hpp"
+#include "core/time.hpp"
+#include "map/keyframe.hpp"
+
+namespace eds {
+
+struct BackendConfig {
+  int window = 7;                 // keyframes
+  int points_per_keyframe = 300;  // points hosted by each keyframe in the optimization
+  bool marginalize = true;        // off: dropped keyframes' information is lost (the authors' code)
+  BaConfig ba;
+  void validate() const;
+};
+
+struct MapPoint {
+  Vec3 p_w;
+  float intensity = 0;  // host image intensity in [0, 1]
+};
+
+struct RetiredKeyframe {
+  int id = 0;
+  TimeNs t = 0;
+  SE3 T_w_kf;
+};
+
+class SlidingWindow {
+ public:
+  SlidingWindow(const CameraModel& pinhole, BackendConfig cfg);
+
+  // Adds a keyframe with its image (undistorted, CV_32F in [0, 1]), its pose and brightness, and the
+  // points it hosts (points without an inverse depth are skipped; at most points_per_keyframe, spread
+  // evenly over the list). Every point in the window is then observed in every other keyframe.
+  void addKeyframe(int id, TimeNs t, const SE3& T_w_kf, double a, double b, const cv::Mat& image,
+                   const std::vector<KeyframePoint>& points);
+  // Optimizes the window; then marginalizes the oldest keyframes while there are more than `window`.
+  BaStats optimize();
+
+  int size() const { return static_cast<int>(frames_.size()); }
+  int newestId() const { return ids_.back(); }
+  const BaFrame& newest() const { return frames_.back(); }
+  // Pose of keyframe `id` if it is in the window.
+  const BaFrame* frame(int id) const;
+  // Points of the window in the newest keyframe's pixel grid, with inverse depths there (for the
+  // trackers and for mapping a new keyframe).
+  std::vector<KeyframePoint> pointsInNewest() const;
+  std::vector<Vec3> worldPoints() const;
+  int numPoints() const;
+  int numPriorFrames() const { return static_cast<int>(prior_.frames.size()); }
+
+  // Everything that left the window (marginalized), and, with flush(), what is in it now.
+  const std::vector<RetiredKeyframe>& retiredKeyframes() const { return retired_kf_; }
+  const std::vector<MapPoint>& retiredPoints() const { return retired_pts_; }
+  void flush();
+
+ private:
+  void marginalizeOldest();
+  void retirePointsOf(int frame_index);
+
+  CameraModel cam_;
+  BackendConfig cfg_;
+  PhotometricBA ba_;
+  std::vector<BaFrame> frames_;
+  std::vector<int> ids_;
+  std::vector<TimeNs> times_;
+  std::vector<BaPoint> points_;
+  BaPrior prior_;
+  std::vector<RetiredKeyframe> retired_kf_;
+  std::vector<MapPoint> retired_pts_;
+};
+
+}  // namespace eds

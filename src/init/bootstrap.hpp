@@ -1,0 +1,76 @@
+#pragma once
+// Bootstrap (paper §3.4, DSO's coarse initializer): the first frame with enough texture becomes the
+// reference; its selected points start at a constant inverse depth of 1. Every following frame is
+// aligned to it (coarse-to-fine, FrameTracker) and then pose and inverse depths are refined jointly by
+// a two-frame photometric bundle adjustment, in which a weak prior holds each inverse depth near its
+// start while the baseline is too short to observe it. Once the parallax caused by translation is
+// large enough (and the alignment good), the map is initialized: inverse depths are scaled to a mean
+// of 1 (monocular scale is arbitrary), with the translations to match.
+#include <optional>
+#include <vector>
+
+#include "backend/photometric_ba.hpp"
+#include "core/camera.hpp"
+#include "core/time.hpp"
+#include "frontend/frame_tracker.hpp"
+#include "frontend/point_selection.hpp"
+#include "map/keyframe.hpp"
+
+namespace eds {
+
+struct BootstrapConfig {
+  PointSelectionConfig points{
+      .tile = 8, .fraction = 0.06, .min_gradient = 0.04, .border = 4, .max_points = 1500};
+  FrameTrackerConfig tracker;
+  BaConfig ba{.iterations = 6};
+  double depth_prior_weight = 0.02;  // ½ w (ρ − 1)² per point; intensity units² per (1/m)²
+  double min_parallax_px = 8.0;      // RMS pixel flow of the translation alone, to declare success
+  int min_points = 100;              // a reference needs this many selected points (texture)
+  int min_frames = 2;                // frames after the reference before success can be declared
+  int max_frames = 50;               // no success by then: the newest frame becomes the reference
+  double max_rmse = 0.05;            // two-frame residual RMS (intensity) above this: restart
+  double max_intensity = 0.98;       // pixels this bright (saturated) are not selected
+  double min_intensity = 0.02;       // nor pixels this dark
+  void validate() const;
+};
+
+struct BootstrapFrame {
+  TimeNs t = 0;
+  SE3 T_ref_c;  // pose of the frame in the reference (world of the bootstrap)
+  double a = 0, b = 0;
+};
+
+class Bootstrap {
+ public:
+  Bootstrap(const CameraModel& pinhole, BootstrapConfig cfg);
+
+  // Feeds the next frame (undistorted, CV_32F in [0, 1]). Returns true when the map is initialized;
+  // after that the accessors below hold the result and further calls throw.
+  bool add(TimeNs t, const cv::Mat& image);
+
+  bool done() const { return done_; }
+  // The reference keyframe (points with inverse depths, mean 1) and every frame since, the last one
+  // being the frame that completed the initialization.
+  const Keyframe& reference() const { return ref_; }
+  const std::vector<BootstrapFrame>& frames() const { return frames_; }
+  const cv::Mat& lastImage() const { return last_image_; }
+  int restarts() const { return restarts_; }
+  double parallax() const { return parallax_; }
+  double rmse() const { return rmse_; }
+
+ private:
+  bool setReference(TimeNs t, const cv::Mat& image);
+  double translationParallax(const SE3& T_c_ref) const;
+
+  CameraModel cam_;
+  BootstrapConfig cfg_;
+  PhotometricBA ba_;
+  Keyframe ref_;
+  bool has_ref_ = false, done_ = false;
+  std::vector<BootstrapFrame> frames_;
+  cv::Mat last_image_;
+  int restarts_ = 0;
+  double parallax_ = 0, rmse_ = 0;
+};
+
+}  // namespace eds

@@ -1,0 +1,74 @@
+#pragma once
+// The odometry pipeline. Today: the frame half of EDS (`eds run --frames-only`, issue #5): bootstrap on
+// frames, direct alignment of every frame to the newest keyframe (constant-velocity prediction),
+// keyframes by DSO's optical-flow criterion, mapping by depth transfer and k-d tree fill, and the
+// sliding-window photometric bundle adjustment with marginalization. The back-end runs synchronously
+// after each new keyframe (deterministic results); the event front-end joins in issue #6.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "backend/sliding_window.hpp"
+#include "frontend/frame_tracker.hpp"
+#include "frontend/point_selection.hpp"
+#include "init/bootstrap.hpp"
+#include "io/sequence.hpp"
+#include "mapping/depth_fill.hpp"
+
+namespace eds {
+
+// DSO's keyframe rule: a new keyframe when the image has moved enough (flows in pixels, relative to
+// width + height), when too few keyframe points remain in view, or when the brightness changed a lot.
+struct FlowKeyframePolicyConfig {
+  double flow_t = 0.022;       // RMS flow of the translation alone / (w + h)   (DSO: 1 / (0.04·1120))
+  double flow_rt = 0.045;      // RMS flow of the whole motion / (w + h)        (DSO: 1 / (0.02·1120))
+  double min_in_view = 0.7;    // fraction of the keyframe's points still in view
+  double max_log_alpha = 0.7;  // |log α| of the affine brightness between frame and keyframe
+};
+
+struct OdometryConfig {
+  BootstrapConfig bootstrap;
+  FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
+  PointSelectionConfig points{
+      .tile = 8, .fraction = 0.06, .min_gradient = 0.03, .border = 4, .max_points = 0};
+  DepthFillConfig fill;
+  BackendConfig backend;
+  FlowKeyframePolicyConfig policy;
+  double frame_rate = 0;  // > 0: keep the frames nearest this rate
+  double start_s = 0;     // skip this much from the first frame
+  double duration_s = 0;  // 0: to the end
+};
+
+struct OdometryFailure {
+  TimeNs t = 0;
+  std::string reason;
+};
+
+struct OdometryResult {
+  Trajectory frames;     // one pose per frame from the bootstrap's reference on (T_w_c)
+  Trajectory keyframes;  // final (optimized) keyframe poses
+  std::vector<MapPoint> map;
+  std::size_t frames_in = 0, tracked = 0;
+  bool initialized = false;
+  TimeNs init_t = 0;   // time of the frame that completed the initialization
+  TimeNs first_t = 0;  // first frame considered
+  int init_frames = 0, init_restarts = 0;
+  std::vector<OdometryFailure> failures;
+  std::vector<double> track_ms, mapping_ms, ba_ms;  // per frame; per keyframe (both)
+  std::vector<int> window_points;                   // per keyframe, after the solve
+  double wall_s = 0, sequence_s = 0;
+  double peak_rss_mb = 0;
+};
+
+OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg);
+
+// Frame indices to process: [start, start + duration) from the first frame, thinned to the frames
+// nearest a lower rate when frame_rate > 0.
+std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, double start_s, double duration_s,
+                                      double frame_rate);
+
+// trajectory_frames.txt, keyframes.txt, map.ply, summary.json.
+void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
+                          const OdometryConfig& cfg);
+
+}  // namespace eds
