@@ -60,6 +60,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--init-parallax", a->cfg.bootstrap.min_parallax_px,
                   "Bootstrap: RMS pixel parallax of translation needed to initialize")
       ->capture_default_str();
+  cmd->add_option("--init-levels", a->cfg.bootstrap.ba_levels, "Bootstrap: pyramid levels of the two-frame BA")
+      ->capture_default_str();
   cmd->add_option("--init-depth-prior", a->cfg.bootstrap.depth_prior_weight,
                   "Bootstrap: weight of the prior holding inverse depths at 1 while parallax is short")
       ->capture_default_str();

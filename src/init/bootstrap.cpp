@@ -1,6 +1,9 @@
 #include "init/bootstrap.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace eds {
@@ -13,7 +16,7 @@ void BootstrapConfig::validate() const {
 }
 
 Bootstrap::Bootstrap(const CameraModel& pinhole, BootstrapConfig cfg)
-    : cam_(pinhole), cfg_(cfg), ba_(pinhole, cfg.ba) {
+    : cam_(pinhole), cfg_(cfg) {
   cfg_.validate();
 }
 
@@ -91,24 +94,44 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
     }
   }
 
-  // Two-frame photometric BA: pose and inverse depths together.
+  // Two-frame photometric BA, pose and inverse depths together, coarse-to-fine: the same points on
+  // every pyramid level (their pattern spans more of the scene on coarse levels), so that depths far
+  // from the constant start (large motion between the first frames) come into the basin.
+  std::vector<cv::Mat> ref_pyr, cur_pyr;
+  tracker.pyramid(ref_.image, ref_pyr);
+  tracker.pyramid(image, cur_pyr);
   std::vector<BaFrame> fr(2);
-  fr[0].image = ref_.image;
   fr[0].fixed = true;
-  fr[1].image = image;
   fr[1].T_w_c = T_c_ref.inverse();
   fr[1].a = std::log(alpha), fr[1].b = beta;
   std::vector<BaPoint> pts;
   pts.reserve(ref_.points.size());
   for (const KeyframePoint& p : ref_.points) {
     BaPoint bp;
-    bp.host = 0, bp.u = p.u, bp.v = p.v;
+    bp.host = 0;
     bp.inv_depth = p.inv_depth > 0 ? p.inv_depth : 1.0;
     bp.targets = {1};
     bp.prior_weight = cfg_.depth_prior_weight, bp.prior_inv_depth = 1.0;
     pts.push_back(bp);
   }
-  const BaStats st = ba_.optimize(fr, pts);
+  BaStats st;
+  for (int l = std::min<int>(cfg_.ba_levels, ref_pyr.size()) - 1; l >= 0; --l) {
+    const double s = 1.0 / (1 << l);
+    CameraModel c = cam_;
+    c.fx *= s, c.fy *= s;
+    c.cx = (cam_.cx + 0.5) * s - 0.5, c.cy = (cam_.cy + 0.5) * s - 0.5;
+    c.width = ref_pyr[l].cols, c.height = ref_pyr[l].rows;
+    fr[0].image = ref_pyr[l];
+    fr[1].image = cur_pyr[l];
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      pts[i].u = static_cast<float>((ref_.points[i].u + 0.5) * s - 0.5);
+      pts[i].v = static_cast<float>((ref_.points[i].v + 0.5) * s - 0.5);
+      pts[i].targets = {1};
+      pts[i].outlier = false;
+    }
+    st = PhotometricBA(c, cfg_.ba).optimize(fr, pts);
+  }
+
   rmse_ = st.final_rmse;
   // Points that do not match (occluded, out of view) keep their depth but are marked unknown.
   int inliers = 0;
@@ -121,6 +144,10 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
   parallax_ = translationParallax(T_c_ref);
 
   const int n_after = static_cast<int>(frames_.size()) - 1;
+  if (std::getenv("EDS_DEBUG"))
+    std::fprintf(stderr, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f\n", n_after,
+                 parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(), fr[1].T_w_c.translation().y(),
+                 fr[1].T_w_c.translation().z());
   if (rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
     ++restarts_;
     setReference(t, image);

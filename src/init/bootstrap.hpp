@@ -23,6 +23,7 @@ struct BootstrapConfig {
       .tile = 8, .fraction = 0.06, .min_gradient = 0.04, .border = 4, .max_points = 1500};
   FrameTrackerConfig tracker;
   BaConfig ba{.iterations = 6};
+  int ba_levels = 1;                 // pyramid levels of the two-frame BA (1: full resolution only)
   double depth_prior_weight = 0.02;  // ½ w (ρ − 1)² per point; intensity units² per (1/m)²
   double min_parallax_px = 8.0;      // RMS pixel flow of the translation alone, to declare success
   int min_points = 100;              // a reference needs this many selected points (texture)
@@ -64,7 +65,6 @@ class Bootstrap {
 
   CameraModel cam_;
   BootstrapConfig cfg_;
-  PhotometricBA ba_;
   Keyframe ref_;
   bool has_ref_ = false, done_ = false;
   std::vector<BootstrapFrame> frames_;
