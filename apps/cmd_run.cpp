@@ -67,6 +67,11 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--ba-iterations", a->cfg.backend.ba.iterations, "Back-end iterations per keyframe")
       ->capture_default_str();
+  cmd->add_option("--min-gradient", a->cfg.points.min_gradient,
+                  "Keyframe points: minimum intensity gradient per pixel (intensity in [0, 1])")
+      ->capture_default_str();
+  cmd->add_flag("!--no-epipolar-search", a->cfg.epipolar_search,
+                "New keyframe points take the depth of the nearest projected map point only");
   cmd->add_flag("--no-marginalization", a->no_marginalization,
                 "Drop old keyframes' information instead of keeping it as a prior");
   cmd->callback([a] { runRun(*a); });

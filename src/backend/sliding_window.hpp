@@ -47,6 +47,7 @@ class SlidingWindow {
   int size() const { return static_cast<int>(frames_.size()); }
   int newestId() const { return ids_.back(); }
   const BaFrame& newest() const { return frames_.back(); }
+  const std::vector<BaFrame>& frames() const { return frames_; }
   // Pose of keyframe `id` if it is in the window.
   const BaFrame* frame(int id) const;
   // Points of the window in the newest keyframe's pixel grid, with inverse depths there (for the

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
 namespace eds {
@@ -53,6 +54,13 @@ std::vector<cv::Point> selectPoints(const cv::Mat& gx, const cv::Mat& gy, const 
   std::sort(out.begin(), out.end(),
             [](const cv::Point& a, const cv::Point& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
   return out;
+}
+
+std::vector<cv::Point> selectPointsOnIntensity(const cv::Mat& image, const PointSelectionConfig& cfg) {
+  cv::Mat gx, gy;
+  cv::Sobel(image, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  cv::Sobel(image, gy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  return selectPoints(gx, gy, cfg);
 }
 
 }  // namespace eds

@@ -20,4 +20,8 @@ struct PointSelectionConfig {
 std::vector<cv::Point> selectPoints(const cv::Mat& grad_x, const cv::Mat& grad_y,
                                     const PointSelectionConfig& cfg);
 
+// The same on the gradient of an intensity image (CV_32F in [0, 1]; Sobel / 8, per pixel): what the
+// frame half selects on (DSO), since the log amplifies sensor noise in dark areas of real frames.
+std::vector<cv::Point> selectPointsOnIntensity(const cv::Mat& image, const PointSelectionConfig& cfg);
+
 }  // namespace eds

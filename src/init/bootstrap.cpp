@@ -16,7 +16,7 @@ void BootstrapConfig::validate() const {
 }
 
 Bootstrap::Bootstrap(const CameraModel& pinhole, BootstrapConfig cfg)
-    : cam_(pinhole), cfg_(cfg) {
+    : cam_(pinhole), cfg_(cfg), geo_(pinhole, cfg.geometric_init) {
   cfg_.validate();
 }
 
@@ -24,7 +24,7 @@ bool Bootstrap::setReference(TimeNs t, const cv::Mat& image) {
   Keyframe kf;
   kf.t = t;
   setKeyframeImage(kf, image);
-  const std::vector<cv::Point> pts = selectPoints(kf.grad_x, kf.grad_y, cfg_.points);
+  const std::vector<cv::Point> pts = selectPointsOnIntensity(kf.image, cfg_.points);
   for (const cv::Point& p : pts) {
     // Saturated or black pixels carry no usable photometric information (HDR sequences start black).
     const float I = kf.image.at<float>(p.y, p.x);
@@ -36,6 +36,7 @@ bool Bootstrap::setReference(TimeNs t, const cv::Mat& image) {
     kf.points.push_back(kp);
   }
   frames_.clear();
+  images_.clear();
   if (static_cast<int>(kf.points.size()) < cfg_.min_points) {
     has_ref_ = false;
     return false;
@@ -43,6 +44,9 @@ bool Bootstrap::setReference(TimeNs t, const cv::Mat& image) {
   ref_ = std::move(kf);
   has_ref_ = true;
   frames_.push_back({t, SE3(), 0.0, 0.0});
+  images_.push_back(image);
+  geo_state_ = cfg_.geometric ? GeoState::kPending : GeoState::kUnavailable;
+  if (cfg_.geometric) geo_.reset(image);
   return true;
 }
 
@@ -70,6 +74,12 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
   if (!has_ref_) {
     setReference(t, image);
     return false;
+  }
+  if (geo_state_ != GeoState::kUnavailable) {
+    const std::optional<GeometricInitResult> g = geo_.add(image);
+    if (g && g->planar) geo_state_ = GeoState::kPlanar;
+    if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
+    if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
   }
   // Constant-velocity prediction in the reference frame.
   SE3 T_c_ref = frames_.back().T_ref_c.inverse();
@@ -141,6 +151,7 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
   }
   T_c_ref = fr[1].T_w_c.inverse();
   frames_.push_back({t, fr[1].T_w_c, fr[1].a, fr[1].b});
+  images_.push_back(image);
   parallax_ = translationParallax(T_c_ref);
 
   const int n_after = static_cast<int>(frames_.size()) - 1;
@@ -153,8 +164,14 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
     setReference(t, image);
     return false;
   }
-  if (n_after < cfg_.min_frames || parallax_ < cfg_.min_parallax_px) return false;
+  if (n_after < cfg_.min_frames || parallax_ < cfg_.min_parallax_px || geo_state_ == GeoState::kPending)
+    return false;
+  normalizeScale();
+  done_ = true;
+  return true;
+}
 
+void Bootstrap::normalizeScale() {
   // Success: mean inverse depth 1, translations scaled to match (depths × m, so translations × m).
   double sum = 0;
   int n = 0;
@@ -163,6 +180,65 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
   const double m = sum / n;
   for (KeyframePoint& p : ref_.points) p.inv_depth /= m;
   for (BootstrapFrame& f : frames_) f.T_ref_c.translation() *= m;
+  images_.clear();
+}
+
+bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const GeometricInitResult& g) {
+  // Depths of the reference's points from the nearest triangulated corners.
+  std::vector<cv::Point> px;
+  for (const KeyframePoint& p : ref_.points) px.emplace_back(static_cast<int>(p.u), static_cast<int>(p.v));
+  const std::vector<double> rho = fillInverseDepth(px, g.points, cfg_.fill);
+  Keyframe ref = ref_;
+  for (std::size_t i = 0; i < ref.points.size(); ++i) ref.points[i].inv_depth = rho[i];
+  // Two-frame photometric refinement from the geometric pose, no depth prior.
+  std::vector<BaFrame> fr(2);
+  fr[0].image = ref.image;
+  fr[0].fixed = true;
+  fr[1].image = image;
+  fr[1].T_w_c = g.T_c_ref.inverse();
+  fr[1].a = frames_.back().a, fr[1].b = frames_.back().b;
+  std::vector<BaPoint> pts;
+  std::vector<std::size_t> which;
+  for (std::size_t i = 0; i < ref.points.size(); ++i) {
+    if (!(rho[i] > 0)) continue;
+    BaPoint bp;
+    bp.host = 0, bp.u = ref.points[i].u, bp.v = ref.points[i].v;
+    bp.inv_depth = rho[i];
+    bp.targets = {1};
+    pts.push_back(bp);
+    which.push_back(i);
+  }
+  if (static_cast<int>(pts.size()) < cfg_.min_points) return false;
+  BaConfig bc = cfg_.ba;
+  bc.iterations = 2 * cfg_.ba.iterations;
+  const BaStats st = PhotometricBA(cam_, bc).optimize(fr, pts);
+  if (std::getenv("EDS_DEBUG"))
+    std::fprintf(stderr, "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f\n",
+                 g.inliers, g.points.size(), pts.size(), st.initial_rmse, st.final_rmse);
+  if (st.final_rmse > cfg_.max_rmse) return false;
+  for (KeyframePoint& p : ref.points) p.inv_depth = 0;
+  int inliers = 0;
+  for (std::size_t j = 0; j < pts.size(); ++j)
+    if (!pts[j].outlier) ref.points[which[j]].inv_depth = pts[j].inv_depth, ++inliers;
+  if (inliers < cfg_.min_points) return false;
+  ref_ = std::move(ref);
+  rmse_ = st.final_rmse;
+  // The frames in between: aligned to the new map, starting from the geodesic between the two poses.
+  const SE3 T_ref_last = fr[1].T_w_c;
+  FrameTracker tracker(cam_, cfg_.tracker);
+  tracker.setKeyframe(ref_);
+  const double span = static_cast<double>(t - frames_.front().t);
+  for (std::size_t k = 1; k < frames_.size(); ++k) {
+    SE3 T_c_ref = interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
+                      .inverse();
+    double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
+    tracker.track(images_[k], T_c_ref, alpha, beta);
+    frames_[k] = {frames_[k].t, T_c_ref.inverse(), std::log(std::max(alpha, 1e-3)), beta};
+  }
+  frames_.push_back({t, T_ref_last, fr[1].a, fr[1].b});
+  parallax_ = translationParallax(T_ref_last.inverse());
+  geometric_used_ = true;
+  normalizeScale();
   done_ = true;
   return true;
 }

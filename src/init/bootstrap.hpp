@@ -6,6 +6,13 @@
 // start while the baseline is too short to observe it. Once the parallax caused by translation is
 // large enough (and the alignment good), the map is initialized: inverse depths are scaled to a mean
 // of 1 (monocular scale is arbitrary), with the translations to match.
+//
+// Alongside, corners are tracked (GeometricInit). Constant initial depth suits planes but not scenes
+// with depth structure and large motion between the first frames (the real slider sequences); when the
+// tracks show a non-planar scene with enough parallax, the essential matrix gives the pose and
+// triangulation the depths (filled into the reference's points), the two-frame photometric BA refines
+// them, and the frames in between are aligned to the new map. The photometric path may only declare
+// success once the tracks have shown the scene to be planar (or there are too few tracks to tell).
 #include <optional>
 #include <vector>
 
@@ -14,13 +21,14 @@
 #include "core/time.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
+#include "init/geometric_init.hpp"
 #include "map/keyframe.hpp"
 
 namespace eds {
 
 struct BootstrapConfig {
   PointSelectionConfig points{
-      .tile = 8, .fraction = 0.06, .min_gradient = 0.04, .border = 4, .max_points = 1500};
+      .tile = 8, .fraction = 0.06, .min_gradient = 0.01, .border = 4, .max_points = 1500};
   FrameTrackerConfig tracker;
   BaConfig ba{.iterations = 6};
   int ba_levels = 1;                 // pyramid levels of the two-frame BA (1: full resolution only)
@@ -32,6 +40,9 @@ struct BootstrapConfig {
   double max_rmse = 0.05;            // two-frame residual RMS (intensity) above this: restart
   double max_intensity = 0.98;       // pixels this bright (saturated) are not selected
   double min_intensity = 0.02;       // nor pixels this dark
+  bool geometric = true;             // the essential-matrix path for non-planar scenes (see below)
+  GeometricInitConfig geometric_init;
+  DepthFillConfig fill{.max_distance_px = 15, .neighbours = 3};
   void validate() const;
 };
 
@@ -58,6 +69,7 @@ class Bootstrap {
   int restarts() const { return restarts_; }
   double parallax() const { return parallax_; }
   double rmse() const { return rmse_; }
+  bool usedGeometric() const { return geometric_used_; }
 
  private:
   bool setReference(TimeNs t, const cv::Mat& image);
@@ -66,7 +78,14 @@ class Bootstrap {
   CameraModel cam_;
   BootstrapConfig cfg_;
   Keyframe ref_;
-  bool has_ref_ = false, done_ = false;
+  bool initFromGeometry(TimeNs t, const cv::Mat& image, const GeometricInitResult& g);
+  void normalizeScale();
+
+  enum class GeoState { kPending, kPlanar, kUnavailable };
+  GeometricInit geo_;
+  GeoState geo_state_ = GeoState::kPending;
+  std::vector<cv::Mat> images_;  // frames since the reference (for re-alignment after the geometric path)
+  bool has_ref_ = false, done_ = false, geometric_used_ = false;
   std::vector<BootstrapFrame> frames_;
   cv::Mat last_image_;
   int restarts_ = 0;

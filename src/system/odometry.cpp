@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -67,9 +69,10 @@ class FramesOdometry {
     setKeyframeImage(kf, img);
     if (pts_with_depth.empty()) {
       // Mapping: the new keyframe's selected pixels take their depth from the window's points.
-      const std::vector<cv::Point> px = selectPoints(kf.grad_x, kf.grad_y, cfg_.points);
-      const std::vector<double> rho =
-          fillInverseDepth(px, projectPoints(window_.worldPoints(), T_w_new, cam_), cfg_.fill);
+      const std::vector<cv::Point> px = selectPointsOnIntensity(kf.image, cfg_.points);
+      const std::vector<ProjectedPoint> proj = projectPoints(window_.worldPoints(), T_w_new, cam_);
+      std::vector<double> rho = fillInverseDepth(px, proj, cfg_.fill);
+      if (cfg_.epipolar_search && !proj.empty()) searchDepths(kf.image, T_w_new, a, b, px, proj, rho);
       for (std::size_t i = 0; i < px.size(); ++i) {
         const float I = kf.image.at<float>(px[i].y, px[i].x);
         if (!(rho[i] > 0) || I > cfg_.bootstrap.max_intensity || I < cfg_.bootstrap.min_intensity) continue;
@@ -83,8 +86,12 @@ class FramesOdometry {
     res_.mapping_ms.push_back(msSince(t0));
     ++next_id_;
     const auto t1 = Clock::now();
-    window_.optimize();
+    const BaStats st = window_.optimize();
     res_.ba_ms.push_back(msSince(t1));
+    if (std::getenv("EDS_DEBUG"))
+      std::fprintf(stderr, "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers\n",
+                   next_id_ - 1, toSeconds(t), pts_with_depth.size(), window_.size(), window_.numPoints(), st.initial_rmse,
+                   st.final_rmse, st.iterations, st.outliers_removed);
     res_.window_points.push_back(window_.numPoints());
     // The tracking reference: the newest keyframe with every window point projected into it.
     const BaFrame& nf = window_.newest();
@@ -93,6 +100,41 @@ class FramesOdometry {
     ref_.image = nf.image;
     ref_.points = window_.pointsInNewest();
     if (!ref_.points.empty()) tracker_.setKeyframe(ref_);
+  }
+
+  // Inverse depths of a new keyframe's pixels by epipolar search in the newest and the oldest keyframe
+  // of the window, over the range of the projected map's inverse depths (widened); where neither
+  // keyframe gives a baseline, the filled value stays; where the search fails or the two disagree, the
+  // pixel gets no depth.
+  void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b, const std::vector<cv::Point>& px,
+                    const std::vector<ProjectedPoint>& proj, std::vector<double>& rho) const {
+    std::vector<double> r;
+    for (const ProjectedPoint& p : proj) r.push_back(p.inv_depth);
+    std::sort(r.begin(), r.end());
+    const double lo = 0.5 * r[r.size() / 50], hi = 2.0 * r[r.size() - 1 - r.size() / 50];
+    const SearchFrame host{&img, T_w_new, a, b};
+    const auto& fr = window_.frames();
+    std::vector<std::vector<EpipolarMatch>> m;
+    for (std::size_t k : {fr.size() - 1, std::size_t{0}}) {
+      m.push_back(epipolarSearch(host, {&fr[k].image, fr[k].T_w_c, fr[k].a, fr[k].b}, cam_, px, lo, hi, cfg_.search));
+      if (fr.size() == 1) break;
+    }
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      const EpipolarMatch* best = nullptr;
+      bool conflict = false, baseline = false;
+      for (const auto& mk : m) {
+        baseline = baseline || mk[i].line_px >= cfg_.search.min_line_px;
+        if (!(mk[i].inv_depth > 0)) continue;
+        if (best && std::abs(best->inv_depth - mk[i].inv_depth) >
+                        cfg_.search_max_disagreement * std::max(best->inv_depth, mk[i].inv_depth))
+          conflict = true;
+        if (!best || mk[i].line_px > best->line_px) best = &mk[i];
+      }
+      if (best && !conflict)
+        rho[i] = best->inv_depth;
+      else if (baseline)
+        rho[i] = 0;
+    }
   }
 
   // Tracks a frame; returns its pose. Adds a keyframe when the policy asks.

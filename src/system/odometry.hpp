@@ -14,6 +14,7 @@
 #include "init/bootstrap.hpp"
 #include "io/sequence.hpp"
 #include "mapping/depth_fill.hpp"
+#include "mapping/epipolar_search.hpp"
 
 namespace eds {
 
@@ -30,8 +31,11 @@ struct OdometryConfig {
   BootstrapConfig bootstrap;
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
   PointSelectionConfig points{
-      .tile = 8, .fraction = 0.06, .min_gradient = 0.03, .border = 4, .max_points = 0};
+      .tile = 8, .fraction = 0.06, .min_gradient = 0.01, .border = 4, .max_points = 0};
   DepthFillConfig fill;
+  EpipolarSearchConfig search;
+  bool epipolar_search = true;  // new points' depth by search in older keyframes (off: fill only)
+  double search_max_disagreement = 0.2;  // two keyframes' inverse depths differ more: point dropped
   BackendConfig backend;
   FlowKeyframePolicyConfig policy;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate

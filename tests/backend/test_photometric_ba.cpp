@@ -188,5 +188,68 @@ TEST(PhotometricBA, RefinesPosesAndDepthsOfASimulatedPlane) {
   EXPECT_LT(p1, 2e-3);
 }
 
+// Marginalization is exact for the linearized problem: one Gauss-Newton step of the remaining frames
+// with the prior equals the step of the joint problem in which the marginalized frame and its points
+// are still variables (when, as here, no other point is observed in the marginalized frame).
+TEST(PhotometricBA, MarginalizationPriorReproducesTheJointStep) {
+  const Scene& s = scene();
+  const int F = 5;
+  ASSERT_GE(static_cast<int>(s.frames.images.size()), F);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<BaFrame> frames(F);
+  for (int f = 0; f < F; ++f) {
+    frames[f].image = s.frames.images[f];
+    frames[f].T_w_c = s.motion.pose(s.frames.times[f]);
+    Vec6 xi;
+    for (int k = 0; k < 3; ++k) xi[k] = 0.002 * n(rng), xi[k + 3] = 0.001 * n(rng);
+    // Gauge and scale: frames 1 and 2 are held (with one, the scale direction would be a null space
+    // of both systems and the two steps could differ along it).
+    frames[f].fixed = f == 1 || f == 2;
+    if (!frames[f].fixed) frames[f].T_w_c = SE3::exp(xi) * frames[f].T_w_c;
+  }
+  std::vector<BaPoint> pts = pointsOf(s, 0, 0.05, rng, F);
+  std::vector<BaPoint> others = pointsOf(s, 2, 0.05, rng, F);
+  for (BaPoint& p : others) p.targets = {1, 3, 4};  // nothing else observed in frame 0
+  pts.insert(pts.end(), others.begin(), others.end());
+
+  BaConfig cfg;
+  cfg.iterations = 1;
+  cfg.lambda_initial = 1e-12;
+  cfg.outlier_energy = 1e9;
+  const PhotometricBA ba(camera(), cfg);
+  // Joint: every frame and point.
+  std::vector<BaFrame> joint_f = frames;
+  std::vector<BaPoint> joint_p = pts;
+  ba.optimize(joint_f, joint_p);
+  // Reduced: frame 0 and its points marginalized at the start state.
+  const BaPrior prior = ba.marginalize(frames, pts, nullptr, 0);
+  ASSERT_EQ(prior.frames, (std::vector<int>{1, 2, 3, 4}));
+  std::vector<BaFrame> red_f(frames.begin() + 1, frames.end());
+  std::vector<BaPoint> red_p;
+  for (const BaPoint& p : pts) {
+    if (p.host == 0) continue;
+    BaPoint q = p;
+    q.host -= 1;
+    for (int& t : q.targets) t -= 1;
+    red_p.push_back(q);
+  }
+  BaPrior shifted = prior;
+  shifted.eraseFrameIndex(0);  // frame 0 is gone: 1, 2, 3, 4 -> 0, 1, 2, 3
+  ASSERT_EQ(shifted.frames, (std::vector<int>{0, 1, 2, 3}));
+  ba.optimize(red_f, red_p, &shifted);
+  for (int f = 3; f < F; ++f) {
+    const double step = (joint_f[f].T_w_c * frames[f].T_w_c.inverse()).log().norm();
+    const double diff = (joint_f[f].T_w_c * red_f[f - 1].T_w_c.inverse()).log().norm();
+    std::printf("[ marg ] frame %d: joint step %.3e, joint vs reduced %.3e\n", f, step, diff);
+    EXPECT_GT(step, 1e-4);
+    EXPECT_LT(diff, 1e-3 * step);
+    EXPECT_NEAR(joint_f[f].a, red_f[f - 1].a, 1e-6);
+    EXPECT_NEAR(joint_f[f].b, red_f[f - 1].b, 1e-6);
+  }
+  // The prior's energy is the quadratic model: zero at its linearization point.
+  EXPECT_NEAR(prior.energy(frames), 0.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace eds

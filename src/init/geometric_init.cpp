@@ -1,0 +1,99 @@
+#include "init/geometric_init.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+namespace eds {
+
+namespace {
+cv::Mat toGray8(const cv::Mat& img) {
+  cv::Mat g;
+  img.convertTo(g, CV_8U, img.type() == CV_32F ? 255.0 : 1.0);
+  return g;
+}
+}  // namespace
+
+GeometricInit::GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg) : cam_(pinhole), cfg_(cfg) {}
+
+void GeometricInit::reset(const cv::Mat& ref_image) {
+  prev_ = toGray8(ref_image);
+  ref_.clear();
+  cv::goodFeaturesToTrack(prev_, ref_, cfg_.max_features, cfg_.quality, cfg_.min_distance);
+  cur_ = ref_;
+}
+
+std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
+  if (prev_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
+  const cv::Mat gray = toGray8(image);
+  std::vector<cv::Point2f> next, back;
+  std::vector<unsigned char> st, st_back;
+  std::vector<float> err;
+  const cv::Size win(21, 21);
+  cv::calcOpticalFlowPyrLK(prev_, gray, cur_, next, st, err, win, 3);
+  cv::calcOpticalFlowPyrLK(gray, prev_, next, back, st_back, err, win, 3);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < cur_.size(); ++i) {
+    const bool inside = next[i].x >= 0 && next[i].y >= 0 && next[i].x <= gray.cols - 1 && next[i].y <= gray.rows - 1;
+    if (!st[i] || !st_back[i] || !inside || cv::norm(back[i] - cur_[i]) > 0.5) continue;
+    ref_[k] = ref_[i];
+    cur_[k] = next[i];
+    ++k;
+  }
+  ref_.resize(k);
+  cur_.resize(k);
+  prev_ = gray;
+  if (static_cast<int>(k) < cfg_.min_tracks) return std::nullopt;
+  std::vector<double> flow(k);
+  for (std::size_t i = 0; i < k; ++i) flow[i] = cv::norm(cur_[i] - ref_[i]);
+  std::nth_element(flow.begin(), flow.begin() + k / 2, flow.end());
+  if (flow[k / 2] < cfg_.min_flow_px) return std::nullopt;
+
+  const cv::Matx33d K(cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1);
+  cv::Mat mask_e, mask_h;
+  const cv::Mat E = cv::findEssentialMat(ref_, cur_, K, cv::RANSAC, 0.999, cfg_.ransac_px, mask_e);
+  const cv::Mat Hm = cv::findHomography(ref_, cur_, cv::RANSAC, cfg_.ransac_px, mask_h);
+  GeometricInitResult res;
+  if (E.rows != 3 || E.cols != 3) return std::nullopt;  // several solutions or none: not this frame
+  const int n_e = cv::countNonZero(mask_e), n_h = Hm.empty() ? 0 : cv::countNonZero(mask_h);
+  res.planar = n_h >= cfg_.planar_ratio * n_e;
+  if (res.planar) return res;
+  cv::Mat R, t;
+  res.inliers = cv::recoverPose(E, ref_, cur_, K, R, t, mask_e);
+  if (res.inliers < cfg_.min_tracks) return std::nullopt;
+  Mat3 Re;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) Re(r, c) = R.at<double>(r, c);
+  const Vec3 te(t.at<double>(0), t.at<double>(1), t.at<double>(2));
+  res.T_c_ref = SE3(Quat(Re).normalized(), te);
+  std::vector<double> angles;
+  // Triangulation by the midpoint-free linear method on normalized coordinates (depth in the reference).
+  for (std::size_t i = 0; i < k; ++i) {
+    if (!mask_e.at<unsigned char>(static_cast<int>(i))) continue;
+    const Vec3 x0((ref_[i].x - cam_.cx) / cam_.fx, (ref_[i].y - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x1((cur_[i].x - cam_.cx) / cam_.fx, (cur_[i].y - cam_.cy) / cam_.fy, 1.0);
+    // z·(R x0) + t = s·x1: least squares for (z, s).
+    Eigen::Matrix<double, 3, 2> A;
+    A.col(0) = Re * x0;
+    A.col(1) = -x1;
+    const Eigen::Vector2d zs = A.colPivHouseholderQr().solve(-te);
+    if (!(zs[0] > 1e-6) || !(zs[1] > 1e-6)) continue;
+    const Vec3 X1 = Re * (x0 * zs[0]) + te;
+    const double du = cam_.fx * X1.x() / X1.z() + cam_.cx - cur_[i].x;
+    const double dv = cam_.fy * X1.y() / X1.z() + cam_.cy - cur_[i].y;
+    if (du * du + dv * dv > cfg_.max_reproj_px * cfg_.max_reproj_px) continue;
+    res.points.push_back({ref_[i].x, ref_[i].y, 1.0 / zs[0]});
+    // Angle between the ray from the reference and the ray from the current camera, at the point.
+    const Vec3 X0 = x0 * zs[0], c1 = -(Re.transpose() * te);
+    angles.push_back(std::acos(std::clamp(X0.normalized().dot((X0 - c1).normalized()), -1.0, 1.0)));
+  }
+  if (static_cast<int>(res.points.size()) < cfg_.min_tracks) return std::nullopt;
+  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+  res.parallax_deg = angles[angles.size() / 2] * 180.0 / M_PI;
+  if (res.parallax_deg < cfg_.min_parallax_deg) return std::nullopt;
+  return res;
+}
+
+}  // namespace eds

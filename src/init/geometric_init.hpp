@@ -1,0 +1,54 @@
+#pragma once
+// The geometric fallback of the bootstrap: corners of the reference frame (Shi-Tomasi) are tracked
+// frame to frame by pyramidal Lucas-Kanade with a forward-backward check; once their median flow is
+// large enough, an essential matrix (RANSAC) gives the relative pose and triangulation the depths.
+// A homography that explains nearly as many tracks as the essential matrix means a planar (or
+// rotation-only) configuration, where the essential matrix degenerates: the result says so and the
+// caller keeps the photometric initializer, which handles planes.
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/se3.hpp"
+#include "mapping/depth_fill.hpp"
+
+namespace eds {
+
+struct GeometricInitConfig {
+  int max_features = 500;
+  double quality = 0.005;     // Shi-Tomasi quality level
+  double min_distance = 6;    // between corners, px
+  double min_flow_px = 12;    // median flow needed before the pose is estimated
+  int min_tracks = 60;        // fewer live tracks: no initialization from this reference
+  double ransac_px = 1.0;     // inlier threshold, px
+  double planar_ratio = 0.9;  // homography inliers ≥ this × essential inliers: planar
+  double max_reproj_px = 2.0; // triangulated points must reproject this well in both frames
+  double min_parallax_deg = 1.5;  // median angle between the two rays of the triangulated points
+};
+
+struct GeometricInitResult {
+  bool planar = false;
+  int inliers = 0;
+  double parallax_deg = 0;  // median triangulation angle
+  SE3 T_c_ref;                          // translation of unit norm
+  std::vector<ProjectedPoint> points;  // triangulated, in the reference: pixel and inverse depth
+};
+
+class GeometricInit {
+ public:
+  GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg);
+  // Starts over with a new reference (undistorted, CV_32F in [0, 1]).
+  void reset(const cv::Mat& ref_image);
+  // Tracks the corners into the next frame; a result once the flow is large enough.
+  std::optional<GeometricInitResult> add(const cv::Mat& image);
+  int tracks() const { return static_cast<int>(cur_.size()); }
+
+ private:
+  CameraModel cam_;
+  GeometricInitConfig cfg_;
+  cv::Mat prev_;
+  std::vector<cv::Point2f> ref_, cur_;
+};
+
+}  // namespace eds

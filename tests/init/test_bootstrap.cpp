@@ -1,0 +1,94 @@
+// Bootstrap on simulated frames: a textured plane along the built-in hand-held motion, 25 Hz.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "init/bootstrap.hpp"
+#include "sim/presets.hpp"
+#include "sim/simulator.hpp"
+
+namespace eds {
+namespace {
+
+CameraModel camera() {
+  CameraModel c;
+  c.width = 240, c.height = 180;
+  c.fx = c.fy = 200;
+  c.cx = 119.5, c.cy = 89.5;
+  return c;
+}
+
+struct Frames : sim::SimSink {
+  void onEvents(const EventArray&) override {}
+  void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) override {
+    times.push_back(t);
+    images.push_back(intensity.clone());
+    depths.push_back(depth.clone());
+  }
+  std::vector<TimeNs> times;
+  std::vector<cv::Mat> images, depths;
+};
+
+TEST(Bootstrap, InitializesPoseAndDepthsUpToScale) {
+  const sim::Motion motion{sim::handheldMotion(2.5, 4)};
+  sim::Scene scene = sim::makePreset("room", motion, 4);
+  scene.loadTextures();
+  sim::SimConfig cfg;
+  cfg.fps = 25;
+  cfg.render.supersample = 2;
+  cfg.events.C_pos = cfg.events.C_neg = 1.0;  // events are not needed here
+  Frames f;
+  sim::Simulator(scene, camera(), motion, cfg).run(motion.start(), motion.end(), f);
+
+  Bootstrap boot(camera(), {});
+  std::size_t i = 0;
+  while (i < f.images.size() && !boot.add(f.times[i], f.images[i])) ++i;
+  ASSERT_LT(i, f.images.size()) << "never initialized";
+  std::printf("[ bootstrap ] initialized after %zu frames, %d restarts, parallax %.1f px, rmse %.4f\n", i + 1,
+              boot.restarts(), boot.parallax(), boot.rmse());
+  EXPECT_LE(i, 40u);
+
+  const Keyframe& ref = boot.reference();
+  const std::size_t r = std::find(f.times.begin(), f.times.end(), ref.t) - f.times.begin();
+  ASSERT_LT(r, f.times.size());
+  // Depths up to one scale: the ratio estimate / truth is the same for every point.
+  std::vector<double> ratio;
+  for (const KeyframePoint& p : ref.points) {
+    const float z = f.depths[r].at<float>(static_cast<int>(p.v), static_cast<int>(p.u));
+    if (p.inv_depth > 0 && z > 0) ratio.push_back(z * p.inv_depth);
+  }
+  ASSERT_GT(ratio.size(), 100u);
+  std::sort(ratio.begin(), ratio.end());
+  const double med = ratio[ratio.size() / 2];
+  std::vector<double> dev;
+  for (double x : ratio) dev.push_back(std::abs(x / med - 1.0));
+  std::sort(dev.begin(), dev.end());
+  std::printf("[ bootstrap ] %zu points, median |depth error| after scale %.2f %%\n", ratio.size(),
+              dev[dev.size() / 2] * 100);
+  EXPECT_LT(dev[dev.size() / 2], 0.05);
+
+  // The pose of the last frame in the reference: rotation, and translation up to the same scale.
+  const SE3 T_ref_c_true = motion.pose(ref.t).inverse() * motion.pose(boot.frames().back().t);
+  const SE3& T_ref_c = boot.frames().back().T_ref_c;
+  const double rot_err = (T_ref_c.so3().inverse() * T_ref_c_true.so3()).log().norm() * 180 / M_PI;
+  const Vec3 t_scaled = T_ref_c.translation() * med;  // true depth = med × estimated depth
+  const double t_err = (t_scaled - T_ref_c_true.translation()).norm() / T_ref_c_true.translation().norm();
+  std::printf("[ bootstrap ] rotation error %.3f deg, translation error %.1f %% of %.1f cm\n", rot_err, t_err * 100,
+              T_ref_c_true.translation().norm() * 100);
+  EXPECT_LT(rot_err, 0.2);
+  EXPECT_LT(t_err, 0.05);
+  EXPECT_THROW(boot.add(f.times.back(), f.images.back()), std::logic_error);
+}
+
+TEST(Bootstrap, FlatFramesNeverInitializeAndBadConfigIsAnError) {
+  Bootstrap boot(camera(), {});
+  const cv::Mat flat(180, 240, CV_32F, cv::Scalar(0.5));
+  for (int i = 0; i < 5; ++i) EXPECT_FALSE(boot.add(i * 40'000'000LL, flat));
+  BootstrapConfig bad;
+  bad.min_parallax_px = 0;
+  EXPECT_THROW(Bootstrap(camera(), bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace eds

@@ -1,0 +1,61 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "mapping/depth_fill.hpp"
+
+namespace eds {
+namespace {
+
+TEST(DepthFill, NearestProjectionMatchesBruteForce) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(0, 240), V(0, 180);
+  std::uniform_real_distribution<double> R(0.2, 2.0);
+  std::vector<ProjectedPoint> proj(500);
+  for (auto& p : proj) p = {U(rng), V(rng), R(rng)};
+  std::vector<cv::Point> px;
+  for (int i = 0; i < 300; ++i) px.emplace_back(static_cast<int>(U(rng)), static_cast<int>(V(rng)));
+  DepthFillConfig cfg;
+  cfg.neighbours = 1;
+  cfg.max_distance_px = 1e9;
+  const std::vector<double> rho = fillInverseDepth(px, proj, cfg);
+  for (std::size_t i = 0; i < px.size(); ++i) {
+    const auto best = std::min_element(proj.begin(), proj.end(), [&](const auto& a, const auto& b) {
+      const auto d = [&](const ProjectedPoint& q) {
+        return (q.u - px[i].x) * (q.u - px[i].x) + (q.v - px[i].y) * (q.v - px[i].y);
+      };
+      return d(a) < d(b);
+    });
+    EXPECT_DOUBLE_EQ(rho[i], best->inv_depth) << i;
+  }
+}
+
+TEST(DepthFill, MedianOfNeighboursAndReach) {
+  // Three projections near (10, 10), one of them an outlier (occluding surface); one far away.
+  const std::vector<ProjectedPoint> proj = {{10, 10, 1.0}, {11, 10, 1.1}, {10, 11, 5.0}, {100, 100, 0.5}};
+  DepthFillConfig cfg;
+  cfg.neighbours = 3;
+  cfg.max_distance_px = 5;
+  const std::vector<double> rho = fillInverseDepth({{10, 10}, {100, 101}, {50, 50}}, proj, cfg);
+  EXPECT_DOUBLE_EQ(rho[0], 1.1);  // median of 1.0, 1.1, 5.0
+  EXPECT_DOUBLE_EQ(rho[1], 0.5);  // only one within reach
+  EXPECT_EQ(rho[2], 0.0);         // none within reach: unknown
+  EXPECT_EQ(fillInverseDepth({{1, 1}}, {}, cfg)[0], 0.0);
+}
+
+TEST(DepthFill, ProjectsIntoTheKeyframe) {
+  CameraModel cam;
+  cam.width = 240, cam.height = 180, cam.fx = cam.fy = 200, cam.cx = 119.5, cam.cy = 89.5;
+  const SE3 T_w_kf(SO3::exp(Vec3(0.01, -0.02, 0.03)), Vec3(0.1, 0.2, -0.3));
+  const Vec3 p_kf(0.1, -0.05, 2.0);
+  const std::vector<Vec3> p_w = {T_w_kf * p_kf, T_w_kf * Vec3(0, 0, -1), T_w_kf * Vec3(10, 0, 1)};
+  const auto out = projectPoints(p_w, T_w_kf, cam);
+  ASSERT_EQ(out.size(), 1u);  // behind the camera and outside the image are dropped
+  EXPECT_NEAR(out[0].u, 200 * 0.05 + 119.5, 1e-4);
+  EXPECT_NEAR(out[0].v, 200 * -0.025 + 89.5, 1e-4);
+  EXPECT_NEAR(out[0].inv_depth, 0.5, 1e-12);
+}
+
+}  // namespace
+}  // namespace eds
