@@ -13,7 +13,7 @@ namespace {
 
 struct RunArgs {
   std::string sequence, out = "run_out";
-  bool frames_only = false, no_marginalization = false;
+  bool frames_only = false;
   OdometryConfig cfg;
 };
 
@@ -22,7 +22,6 @@ void runRun(RunArgs& a) {
     throw std::invalid_argument(
         "eds run: the event front-end is not joined to the mapping yet (issue #6); use --frames-only, or "
         "`eds track --depth-from-gt` for event tracking with known depth");
-  if (a.no_marginalization) a.cfg.backend.marginalize = false;
   const Sequence seq(a.sequence);
   const OdometryResult r = runOdometry(seq, a.cfg);
   writeOdometryOutputs(a.out, r, a.cfg);
@@ -60,7 +59,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--init-parallax", a->cfg.bootstrap.min_parallax_px,
                   "Bootstrap: RMS pixel parallax of translation needed to initialize")
       ->capture_default_str();
-  cmd->add_option("--init-levels", a->cfg.bootstrap.ba_levels, "Bootstrap: pyramid levels of the two-frame BA")
+  cmd->add_option("--init-levels", a->cfg.bootstrap.ba_levels,
+                  "Bootstrap: pyramid levels of the two-frame BA")
       ->capture_default_str();
   cmd->add_option("--init-depth-prior", a->cfg.bootstrap.depth_prior_weight,
                   "Bootstrap: weight of the prior holding inverse depths at 1 while parallax is short")
@@ -72,8 +72,8 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("!--no-epipolar-search", a->cfg.epipolar_search,
                 "New keyframe points take the depth of the nearest projected map point only");
-  cmd->add_flag("--no-marginalization", a->no_marginalization,
-                "Drop old keyframes' information instead of keeping it as a prior");
+  cmd->add_flag("--marginalization", a->cfg.backend.marginalize,
+                "Keep old keyframes' information as a prior (experimental: no first-estimate Jacobians yet)");
   cmd->callback([a] { runRun(*a); });
 }
 

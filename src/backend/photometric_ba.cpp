@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "frontend/frame_tracker.hpp"  // sampleBilinear

@@ -156,9 +156,9 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
 
   const int n_after = static_cast<int>(frames_.size()) - 1;
   if (std::getenv("EDS_DEBUG"))
-    std::fprintf(stderr, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f\n", n_after,
-                 parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(), fr[1].T_w_c.translation().y(),
-                 fr[1].T_w_c.translation().z());
+    std::fprintf(stderr, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f\n",
+                 n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
+                 fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
   if (rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
     ++restarts_;
     setReference(t, image);
@@ -213,7 +213,8 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   bc.iterations = 2 * cfg_.ba.iterations;
   const BaStats st = PhotometricBA(cam_, bc).optimize(fr, pts);
   if (std::getenv("EDS_DEBUG"))
-    std::fprintf(stderr, "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f\n",
+    std::fprintf(stderr,
+                 "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f\n",
                  g.inliers, g.points.size(), pts.size(), st.initial_rmse, st.final_rmse);
   if (st.final_rmse > cfg_.max_rmse) return false;
   for (KeyframePoint& p : ref.points) p.inv_depth = 0;
@@ -229,8 +230,9 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   tracker.setKeyframe(ref_);
   const double span = static_cast<double>(t - frames_.front().t);
   for (std::size_t k = 1; k < frames_.size(); ++k) {
-    SE3 T_c_ref = interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
-                      .inverse();
+    SE3 T_c_ref =
+        interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
+            .inverse();
     double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
     tracker.track(images_[k], T_c_ref, alpha, beta);
     frames_[k] = {frames_[k].t, T_c_ref.inverse(), std::log(std::max(alpha, 1e-3)), beta};

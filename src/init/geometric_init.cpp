@@ -16,7 +16,8 @@ cv::Mat toGray8(const cv::Mat& img) {
 }
 }  // namespace
 
-GeometricInit::GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg) : cam_(pinhole), cfg_(cfg) {}
+GeometricInit::GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg)
+    : cam_(pinhole), cfg_(cfg) {}
 
 void GeometricInit::reset(const cv::Mat& ref_image) {
   prev_ = toGray8(ref_image);
@@ -36,7 +37,8 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   cv::calcOpticalFlowPyrLK(gray, prev_, next, back, st_back, err, win, 3);
   std::size_t k = 0;
   for (std::size_t i = 0; i < cur_.size(); ++i) {
-    const bool inside = next[i].x >= 0 && next[i].y >= 0 && next[i].x <= gray.cols - 1 && next[i].y <= gray.rows - 1;
+    const bool inside =
+        next[i].x >= 0 && next[i].y >= 0 && next[i].x <= gray.cols - 1 && next[i].y <= gray.rows - 1;
     if (!st[i] || !st_back[i] || !inside || cv::norm(back[i] - cur_[i]) > 0.5) continue;
     ref_[k] = ref_[i];
     cur_[k] = next[i];

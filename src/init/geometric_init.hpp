@@ -17,21 +17,21 @@ namespace eds {
 
 struct GeometricInitConfig {
   int max_features = 500;
-  double quality = 0.005;     // Shi-Tomasi quality level
-  double min_distance = 6;    // between corners, px
-  double min_flow_px = 12;    // median flow needed before the pose is estimated
-  int min_tracks = 60;        // fewer live tracks: no initialization from this reference
-  double ransac_px = 1.0;     // inlier threshold, px
-  double planar_ratio = 0.9;  // homography inliers ≥ this × essential inliers: planar
-  double max_reproj_px = 2.0; // triangulated points must reproject this well in both frames
+  double quality = 0.005;         // Shi-Tomasi quality level
+  double min_distance = 6;        // between corners, px
+  double min_flow_px = 12;        // median flow needed before the pose is estimated
+  int min_tracks = 60;            // fewer live tracks: no initialization from this reference
+  double ransac_px = 1.0;         // inlier threshold, px
+  double planar_ratio = 0.9;      // homography inliers ≥ this × essential inliers: planar
+  double max_reproj_px = 2.0;     // triangulated points must reproject this well in both frames
   double min_parallax_deg = 1.5;  // median angle between the two rays of the triangulated points
 };
 
 struct GeometricInitResult {
   bool planar = false;
   int inliers = 0;
-  double parallax_deg = 0;  // median triangulation angle
-  SE3 T_c_ref;                          // translation of unit norm
+  double parallax_deg = 0;             // median triangulation angle
+  SE3 T_c_ref;                         // translation of unit norm
   std::vector<ProjectedPoint> points;  // triangulated, in the reference: pixel and inverse depth
 };
 

@@ -13,9 +13,9 @@ namespace {
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
 }  // namespace
 
-std::vector<EpipolarMatch> epipolarSearch(const SearchFrame& host, const SearchFrame& ref, const CameraModel& cam,
-                                          const std::vector<cv::Point>& pixels, double rho_lo, double rho_hi,
-                                          const EpipolarSearchConfig& cfg) {
+std::vector<EpipolarMatch> epipolarSearch(const SearchFrame& host, const SearchFrame& ref,
+                                          const CameraModel& cam, const std::vector<cv::Point>& pixels,
+                                          double rho_lo, double rho_hi, const EpipolarSearchConfig& cfg) {
   std::vector<EpipolarMatch> out(pixels.size());
   const SE3 T_r_h = ref.T_w_c.inverse() * host.T_w_c;
   const Mat3 R = T_r_h.rotationMatrix();

@@ -15,11 +15,11 @@
 namespace eds {
 
 struct EpipolarSearchConfig {
-  double step_px = 0.5;         // sampling step along the line
-  double max_rms = 0.04;        // pattern RMS (intensity) of an acceptable match
-  double uniqueness = 1.5;      // second-best match (two steps away or more) ≥ this × best, in energy
-  double min_line_px = 2.0;     // shorter search lines: depth unobservable, no result
-  int max_samples = 400;        // per point (long lines are sampled more coarsely)
+  double step_px = 0.5;      // sampling step along the line
+  double max_rms = 0.04;     // pattern RMS (intensity) of an acceptable match
+  double uniqueness = 1.5;   // second-best match (two steps away or more) ≥ this × best, in energy
+  double min_line_px = 2.0;  // shorter search lines: depth unobservable, no result
+  int max_samples = 400;     // per point (long lines are sampled more coarsely)
 };
 
 struct SearchFrame {
@@ -35,8 +35,8 @@ struct EpipolarMatch {
 };
 
 // One result per pixel of the host.
-std::vector<EpipolarMatch> epipolarSearch(const SearchFrame& host, const SearchFrame& ref, const CameraModel& cam,
-                                          const std::vector<cv::Point>& pixels, double rho_lo, double rho_hi,
-                                          const EpipolarSearchConfig& cfg);
+std::vector<EpipolarMatch> epipolarSearch(const SearchFrame& host, const SearchFrame& ref,
+                                          const CameraModel& cam, const std::vector<cv::Point>& pixels,
+                                          double rho_lo, double rho_hi, const EpipolarSearchConfig& cfg);
 
 }  // namespace eds

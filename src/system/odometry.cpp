@@ -89,9 +89,11 @@ class FramesOdometry {
     const BaStats st = window_.optimize();
     res_.ba_ms.push_back(msSince(t1));
     if (std::getenv("EDS_DEBUG"))
-      std::fprintf(stderr, "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers\n",
-                   next_id_ - 1, toSeconds(t), pts_with_depth.size(), window_.size(), window_.numPoints(), st.initial_rmse,
-                   st.final_rmse, st.iterations, st.outliers_removed);
+      std::fprintf(
+          stderr,
+          "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers\n",
+          next_id_ - 1, toSeconds(t), pts_with_depth.size(), window_.size(), window_.numPoints(),
+          st.initial_rmse, st.final_rmse, st.iterations, st.outliers_removed);
     res_.window_points.push_back(window_.numPoints());
     // The tracking reference: the newest keyframe with every window point projected into it.
     const BaFrame& nf = window_.newest();
@@ -106,8 +108,9 @@ class FramesOdometry {
   // of the window, over the range of the projected map's inverse depths (widened); where neither
   // keyframe gives a baseline, the filled value stays; where the search fails or the two disagree, the
   // pixel gets no depth.
-  void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b, const std::vector<cv::Point>& px,
-                    const std::vector<ProjectedPoint>& proj, std::vector<double>& rho) const {
+  void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b,
+                    const std::vector<cv::Point>& px, const std::vector<ProjectedPoint>& proj,
+                    std::vector<double>& rho) const {
     std::vector<double> r;
     for (const ProjectedPoint& p : proj) r.push_back(p.inv_depth);
     std::sort(r.begin(), r.end());
@@ -116,7 +119,8 @@ class FramesOdometry {
     const auto& fr = window_.frames();
     std::vector<std::vector<EpipolarMatch>> m;
     for (std::size_t k : {fr.size() - 1, std::size_t{0}}) {
-      m.push_back(epipolarSearch(host, {&fr[k].image, fr[k].T_w_c, fr[k].a, fr[k].b}, cam_, px, lo, hi, cfg_.search));
+      m.push_back(
+          epipolarSearch(host, {&fr[k].image, fr[k].T_w_c, fr[k].a, fr[k].b}, cam_, px, lo, hi, cfg_.search));
       if (fr.size() == 1) break;
     }
     for (std::size_t i = 0; i < px.size(); ++i) {

@@ -34,7 +34,7 @@ struct OdometryConfig {
       .tile = 8, .fraction = 0.06, .min_gradient = 0.01, .border = 4, .max_points = 0};
   DepthFillConfig fill;
   EpipolarSearchConfig search;
-  bool epipolar_search = true;  // new points' depth by search in older keyframes (off: fill only)
+  bool epipolar_search = true;           // new points' depth by search in older keyframes (off: fill only)
   double search_max_disagreement = 0.2;  // two keyframes' inverse depths differ more: point dropped
   BackendConfig backend;
   FlowKeyframePolicyConfig policy;

@@ -74,8 +74,8 @@ TEST(Bootstrap, InitializesPoseAndDepthsUpToScale) {
   const double rot_err = (T_ref_c.so3().inverse() * T_ref_c_true.so3()).log().norm() * 180 / M_PI;
   const Vec3 t_scaled = T_ref_c.translation() * med;  // true depth = med × estimated depth
   const double t_err = (t_scaled - T_ref_c_true.translation()).norm() / T_ref_c_true.translation().norm();
-  std::printf("[ bootstrap ] rotation error %.3f deg, translation error %.1f %% of %.1f cm\n", rot_err, t_err * 100,
-              T_ref_c_true.translation().norm() * 100);
+  std::printf("[ bootstrap ] rotation error %.3f deg, translation error %.1f %% of %.1f cm\n", rot_err,
+              t_err * 100, T_ref_c_true.translation().norm() * 100);
   EXPECT_LT(rot_err, 0.2);
   EXPECT_LT(t_err, 0.05);
   EXPECT_THROW(boot.add(f.times.back(), f.images.back()), std::logic_error);
