@@ -61,6 +61,9 @@ void addTrackCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--depth-noise", a->cfg.depth_noise, "Depth noise sigma, fraction of the median depth")
       ->capture_default_str();
+  cmd->add_option("--depth-median", a->cfg.depth_median_px,
+                  "Median-filter keyframe inverse depths over this radius, px (0: off)")
+      ->capture_default_str();
   cmd->add_option("--seed", a->cfg.seed, "Seed of the depth noise")->capture_default_str();
   cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process from the first frame (0: all)")
       ->capture_default_str();

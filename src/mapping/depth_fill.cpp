@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <nanoflann.hpp>
+#include <stdexcept>
 
 namespace eds {
 
@@ -60,6 +61,31 @@ std::vector<double> fillInverseDepth(const std::vector<cv::Point>& pixels,
     out[i] = rho[m / 2];
   }
   return out;
+}
+
+void medianFilterInverseDepth(std::vector<cv::Point2f>& px, std::vector<double>& inv_depth,
+                              double radius_px) {
+  if (px.size() != inv_depth.size()) throw std::invalid_argument("medianFilterInverseDepth: size mismatch");
+  std::vector<ProjectedPoint> pts;
+  std::vector<std::size_t> which;
+  for (std::size_t i = 0; i < px.size(); ++i)
+    if (inv_depth[i] > 0) pts.push_back({px[i].x, px[i].y, inv_depth[i]}), which.push_back(i);
+  if (pts.empty() || !(radius_px > 0)) return;
+  const ProjectionCloud cloud{pts};
+  const Tree tree(2, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  std::vector<std::pair<std::size_t, float>> hits;
+  std::vector<double> rho;
+  nanoflann::SearchParams params;
+  params.sorted = false;
+  const float r2 = static_cast<float>(radius_px * radius_px);
+  for (std::size_t j = 0; j < pts.size(); ++j) {
+    const float q[2] = {pts[j].u, pts[j].v};
+    tree.radiusSearch(q, r2, hits, params);
+    rho.clear();
+    for (const auto& h : hits) rho.push_back(pts[h.first].inv_depth);
+    std::nth_element(rho.begin(), rho.begin() + rho.size() / 2, rho.end());
+    inv_depth[which[j]] = rho[rho.size() / 2];
+  }
 }
 
 }  // namespace eds

@@ -30,4 +30,10 @@ std::vector<double> fillInverseDepth(const std::vector<cv::Point>& pixels,
                                      const std::vector<ProjectedPoint>& projected,
                                      const DepthFillConfig& cfg);
 
+// Replaces each inverse depth by the median over the points within `radius_px` (itself included):
+// i.i.d. depth noise shrinks the translational part of a direct tracker's motion estimate (the
+// regressor is noisy: attenuation), most where the scene's depth varies little; the median keeps
+// depth edges. Points with no depth (0) are neither changed nor used.
+void medianFilterInverseDepth(std::vector<cv::Point2f>& px, std::vector<double>& inv_depth, double radius_px);
+
 }  // namespace eds

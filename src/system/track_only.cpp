@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
+#include "mapping/depth_fill.hpp"
 
 namespace eds {
 
@@ -122,6 +123,13 @@ struct KeyframeBuilder {
       std::normal_distribution<double> noise(0.0, cfg.depth_noise * median);
       for (KeyframePoint& kp : kf.points)
         if (kp.inv_depth > 0) kp.inv_depth = 1.0 / std::max(0.05 * median, 1.0 / kp.inv_depth + noise(rng));
+    }
+    if (cfg.depth_median_px > 0) {
+      std::vector<cv::Point2f> px;
+      std::vector<double> rho;
+      for (const KeyframePoint& kp : kf.points) px.emplace_back(kp.u, kp.v), rho.push_back(kp.inv_depth);
+      medianFilterInverseDepth(px, rho, cfg.depth_median_px);
+      for (std::size_t i = 0; i < rho.size(); ++i) kf.points[i].inv_depth = rho[i];
     }
     return kf;
   }

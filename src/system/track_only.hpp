@@ -33,6 +33,10 @@ struct TrackOnlyConfig {
   // previous keyframe (on by default; off = event poses only).
   bool refine_keyframes = true;
   double depth_noise = 0.0;  // sigma of additive depth noise, as a fraction of the median depth
+  // > 0: median-filter keyframe inverse depths over this radius (px). Noisy depth attenuates the
+  // tracker's translation (errors in the regressor); with 10% noise on the ESIM plane the ATE is 15 cm
+  // unfiltered, 0.9 cm at 10 px; with exact depth it changes nothing measurable.
+  double depth_median_px = 10.0;
   std::uint64_t seed = 1;
   double duration_s = 0.0;          // 0 = the whole sequence (from the first frame)
   std::filesystem::path debug_dir;  // non-empty: write event frame | prediction PNGs there

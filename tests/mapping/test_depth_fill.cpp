@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "mapping/depth_fill.hpp"
@@ -55,6 +56,39 @@ TEST(DepthFill, ProjectsIntoTheKeyframe) {
   EXPECT_NEAR(out[0].u, 200 * 0.05 + 119.5, 1e-4);
   EXPECT_NEAR(out[0].v, 200 * -0.025 + 89.5, 1e-4);
   EXPECT_NEAR(out[0].inv_depth, 0.5, 1e-12);
+}
+
+TEST(DepthFill, MedianFilterRemovesNoiseAndKeepsADepthEdge) {
+  // Two surfaces: inverse depth 1 on the left half, 0.25 on the right; 10 % noise on every point.
+  std::mt19937 rng(9);
+  std::normal_distribution<double> n(0.0, 0.1);
+  std::vector<cv::Point2f> px;
+  std::vector<double> rho, truth;
+  for (int y = 0; y < 60; y += 2)
+    for (int x = 0; x < 80; x += 2) {
+      px.emplace_back(x, y);
+      truth.push_back(x < 40 ? 1.0 : 0.25);
+      rho.push_back(truth.back() * (1.0 + n(rng)));
+    }
+  rho[5] = 0.0;  // unknown stays unknown
+  const auto rms = [&](const std::vector<double>& r) {
+    double ss = 0;
+    int c = 0;
+    for (std::size_t i = 0; i < r.size(); ++i)
+      if (r[i] > 0) ss += std::pow(r[i] / truth[i] - 1.0, 2), ++c;
+    return std::sqrt(ss / c);
+  };
+  const double before = rms(rho);
+  medianFilterInverseDepth(px, rho, 6.0);
+  const double after = rms(rho);
+  std::printf("[ median ] relative inverse-depth error %.1f %% -> %.1f %%\n", before * 100, after * 100);
+  EXPECT_LT(after, before / 2.5);
+  EXPECT_EQ(rho[5], 0.0);
+  // Points right at the edge keep their own surface (the median does not average across it).
+  for (std::size_t i = 0; i < px.size(); ++i)
+    if ((px[i].x == 38 || px[i].x == 40) && rho[i] > 0) EXPECT_NEAR(rho[i], truth[i], 0.35 * truth[i]) << i;
+  std::vector<double> wrong(3, 1.0);
+  EXPECT_THROW(medianFilterInverseDepth(px, wrong, 6.0), std::invalid_argument);
 }
 
 }  // namespace
