@@ -43,6 +43,7 @@ bool Bootstrap::setReference(TimeNs t, const cv::Mat& image) {
   }
   ref_ = std::move(kf);
   has_ref_ = true;
+  parallax_ = 0;
   frames_.push_back({t, SE3(), 0.0, 0.0});
   images_.push_back(image);
   geo_state_ = cfg_.geometric ? GeoState::kPending : GeoState::kUnavailable;
@@ -152,14 +153,16 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
   T_c_ref = fr[1].T_w_c.inverse();
   frames_.push_back({t, fr[1].T_w_c, fr[1].a, fr[1].b});
   images_.push_back(image);
+  const double previous_parallax = parallax_;
   parallax_ = translationParallax(T_c_ref);
+  const bool diverged = parallax_ - previous_parallax > cfg_.max_parallax_step_px;
 
   const int n_after = static_cast<int>(frames_.size()) - 1;
   if (std::getenv("EDS_DEBUG"))
     std::fprintf(stderr, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f\n",
                  n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
                  fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
-  if (rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
+  if (diverged || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
     ++restarts_;
     setReference(t, image);
     return false;

@@ -34,9 +34,10 @@ struct BootstrapConfig {
   int ba_levels = 1;                 // pyramid levels of the two-frame BA (1: full resolution only)
   double depth_prior_weight = 0.02;  // ½ w (ρ − 1)² per point; intensity units² per (1/m)²
   double min_parallax_px = 8.0;      // RMS pixel flow of the translation alone, to declare success
-  int min_points = 100;              // a reference needs this many selected points (texture)
+  int min_points = 300;              // a reference needs this many selected points (texture)
   int min_frames = 2;                // frames after the reference before success can be declared
   int max_frames = 50;               // no success by then: the newest frame becomes the reference
+  double max_parallax_step_px = 25;  // parallax growing faster than this per frame: diverged, restart
   double max_rmse = 0.05;            // two-frame residual RMS (intensity) above this: restart
   double max_intensity = 0.98;       // pixels this bright (saturated) are not selected
   double min_intensity = 0.02;       // nor pixels this dark
