@@ -1,6 +1,7 @@
 #include "backend/photometric_ba.hpp"
 
 #include <Eigen/Cholesky>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
@@ -26,23 +27,47 @@ PhotometricBA::PhotometricBA(const CameraModel& pinhole, BaConfig cfg) : cam_(pi
     throw std::invalid_argument("photometric BA: bad configuration");
 }
 
-bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& p, int target,
-                             Eigen::Matrix<double, 8, 1>& r, Eigen::Matrix<double, 8, 17>* J) const {
-  const BaFrame& H = frames.at(p.host);
-  const BaFrame& T = frames.at(target);
-  const SE3 T_t_w = T.T_w_c.inverse();
-  const SE3 T_t_h = T_t_w * H.T_w_c;
-  const Mat3 R_t_w = T_t_w.rotationMatrix(), R_t_h = T_t_h.rotationMatrix();
-  const double e = std::exp(T.a - H.a);
+// Relative pose of every (host, target) pair and what the residual needs of it, computed once per
+// state instead of once per point.
+struct PairTransforms {
+  int F = 0;
+  std::vector<SE3> T_t_h;
+  std::vector<Mat3> R_t_h, R_t_w;
+  std::vector<double> e;  // e^{a_t − a_h}
+  explicit PairTransforms(const std::vector<BaFrame>& frames) : F(static_cast<int>(frames.size())) {
+    T_t_h.resize(F * F), R_t_h.resize(F * F), R_t_w.resize(F * F), e.resize(F * F);
+    for (int t = 0; t < F; ++t) {
+      const SE3 T_t_w = frames[t].T_w_c.inverse();
+      const Mat3 Rtw = T_t_w.rotationMatrix();
+      for (int h = 0; h < F; ++h) {
+        const int i = h * F + t;
+        T_t_h[i] = T_t_w * frames[h].T_w_c;
+        R_t_h[i] = T_t_h[i].rotationMatrix();
+        R_t_w[i] = Rtw;
+        e[i] = std::exp(frames[t].a - frames[h].a);
+      }
+    }
+  }
+};
+
+bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host,
+                                 float u, float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
+                                 Eigen::Matrix<double, 8, 17>* J, const double* host_values) const {
+  const BaFrame& H = frames[host];
+  const BaFrame& T = frames[target];
+  const int pi = host * pairs.F + target;
+  const SE3& T_t_h = pairs.T_t_h[pi];
+  const Mat3& R_t_w = pairs.R_t_w[pi];
+  const Mat3& R_t_h = pairs.R_t_h[pi];
+  const double e = pairs.e[pi];
   const int W = H.image.cols, Hh = H.image.rows;
   for (int k = 0; k < 8; ++k) {
-    const double uk = p.u + kPattern[k][0], vk = p.v + kPattern[k][1];
+    const double uk = u + kPattern[k][0], vk = v + kPattern[k][1];
     if (uk < 0 || vk < 0 || uk >= W - 1 || vk >= Hh - 1) return false;
-    double hx, hy;
-    const double I_h = sampleBilinear(H.image, uk, vk, hx, hy);
+    const double I_h = host_values ? host_values[k] : static_cast<double>(sampleBilinear(H.image, uk, vk));
     const Vec3 x_h((uk - cam_.cx) / cam_.fx, (vk - cam_.cy) / cam_.fy, 1.0);
-    const Vec3 X_h = x_h / p.inv_depth;
-    const Vec3 X_t = T_t_h * X_h;
+    const Vec3 X_h = x_h / rho;
+    const Vec3 X_t = R_t_h * X_h + T_t_h.translation();
     if (X_t.z() <= 1e-6) return false;
     const double iz = 1.0 / X_t.z();
     const double ut = cam_.fx * X_t.x() * iz + cam_.cx, vt = cam_.fy * X_t.y() * iz + cam_.cy;
@@ -66,10 +91,18 @@ bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& 
       J->block<1, 3>(k, 11) = -gx;
       (*J)(k, 14) = -e * (I_h - H.b);
       (*J)(k, 15) = -1.0;
-      (*J)(k, 16) = dI_dX * (R_t_h * (-x_h / (p.inv_depth * p.inv_depth)));
+      (*J)(k, 16) = dI_dX * (R_t_h * (-x_h / (rho * rho)));
     }
   }
   return true;
+}
+
+bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& p, int target,
+                             Eigen::Matrix<double, 8, 1>& r, Eigen::Matrix<double, 8, 17>* J) const {
+  if (p.host < 0 || p.host >= static_cast<int>(frames.size()) || target < 0 ||
+      target >= static_cast<int>(frames.size()))
+    throw std::out_of_range("photometric BA: frame index out of range");
+  return evaluateCore(frames, PairTransforms(frames), p.host, p.u, p.v, p.inv_depth, target, r, J);
 }
 
 Eigen::VectorXd BaPrior::delta(const std::vector<BaFrame>& fr) const {
@@ -97,75 +130,103 @@ void BaPrior::eraseFrameIndex(int removed) {
 }
 
 // Normal equations of the photometric terms with the points kept apart (one inverse depth each), so
-// that they can be eliminated by the Schur complement.
+// that they can be eliminated by the Schur complement. Hfp holds one column per point.
 struct NormalEquations {
   Eigen::MatrixXd Hff;
   Eigen::VectorXd bf;
   std::vector<double> Hpp, bp;
-  std::vector<Eigen::VectorXd> Hfp;
+  Eigen::MatrixXd Hfp;
 };
+
+std::vector<HostPattern> PhotometricBA::hostPatterns(const std::vector<BaFrame>& frames,
+                                                     const std::vector<BaPoint>& points) const {
+  // √(c²/(c²+|∇I|²)) on the residual is c²/(c²+|∇I|²) on its square: strong edges count less, since
+  // small geometric errors make large photometric ones there.
+  const double c2 = cfg_.grad_weight_c * cfg_.grad_weight_c;
+  std::vector<HostPattern> w(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const BaPoint& p = points[i];
+    const cv::Mat& img = frames[p.host].image;
+    for (int k = 0; k < 8; ++k) {
+      const double uk = p.u + kPattern[k][0], vk = p.v + kPattern[k][1];
+      double gx = 0, gy = 0, I = 0;
+      if (uk >= 0 && vk >= 0 && uk < img.cols - 1 && vk < img.rows - 1)
+        I = sampleBilinear(img, uk, vk, gx, gy);
+      w[i].w[k] = c2 / (c2 + gx * gx + gy * gy);
+      w[i].I[k] = I;
+    }
+  }
+  return w;
+}
+
+double PhotometricBA::cost(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                           const std::vector<double>& rho, const std::vector<HostPattern>& gw,
+                           const BaPrior* prior, double* rmse, int* count) const {
+  const PairTransforms pairs(frames);
+  const double d = cfg_.huber;
+  double c = 0, ss = 0;
+  int n = 0;
+  Eigen::Matrix<double, 8, 1> r;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const BaPoint& p = points[i];
+    if (p.outlier) continue;
+    if (p.prior_weight > 0) {
+      const double e = rho[i] - p.prior_inv_depth;
+      c += 0.5 * p.prior_weight * e * e;
+    }
+    for (int t : p.targets) {
+      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, nullptr, gw[i].I.data())) continue;
+      for (int k = 0; k < 8; ++k) {
+        c += gw[i].w[k] * huberCost(r[k], d);
+        ss += r[k] * r[k];
+        ++n;
+      }
+    }
+  }
+  if (prior) c += prior->energy(frames);
+  if (rmse) *rmse = n ? std::sqrt(ss / n) : 0.0;
+  if (count) *count = n;
+  return c;
+}
 
 BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoint>& points,
                                 const BaPrior* prior) const {
   BaStats stats;
   const int F = static_cast<int>(frames.size());
+  for (const BaPoint& p : points) {
+    if (p.host < 0 || p.host >= F) throw std::out_of_range("photometric BA: point host out of range");
+    for (int t : p.targets)
+      if (t < 0 || t >= F || t == p.host) throw std::out_of_range("photometric BA: bad point target");
+  }
   // Frame parameter index (-1 for fixed frames): the system only holds the free ones.
   std::vector<int> slot(F, -1);
   int nf = 0;
   for (int f = 0; f < F; ++f)
     if (!frames[f].fixed) slot[f] = nf++;
   const int dim = nf * kFrameParams;
-  const double d = cfg_.huber, c2 = cfg_.grad_weight_c * cfg_.grad_weight_c;
   if (prior && prior->empty()) prior = nullptr;
+  const std::vector<HostPattern> gw = hostPatterns(frames, points);
+  const std::size_t np = points.size();
+  std::vector<double> rho(np), rho_new(np);
+  for (std::size_t i = 0; i < np; ++i) rho[i] = points[i].inv_depth;
 
-  // Gradient weights per point and pattern pixel, from the host image (fixed during the solve).
-  const auto gradWeight = [&](const BaPoint& p, int k) {
-    double gx, gy;
-    sampleBilinear(frames[p.host].image, p.u + kPattern[k][0], p.v + kPattern[k][1], gx, gy);
-    return c2 / (c2 + gx * gx + gy * gy);
-  };
-  const auto totalCost = [&](const std::vector<BaFrame>& fr, const std::vector<BaPoint>& pts, double* rmse,
-                             int* count) {
-    double cost = 0, ss = 0;
-    int n = 0;
-    Eigen::Matrix<double, 8, 1> r;
-    for (const BaPoint& p : pts) {
-      if (p.outlier) continue;
-      if (p.prior_weight > 0) {
-        const double e = p.inv_depth - p.prior_inv_depth;
-        cost += 0.5 * p.prior_weight * e * e;
-      }
-      for (int t : p.targets) {
-        if (!evaluate(fr, p, t, r, nullptr)) continue;
-        for (int k = 0; k < 8; ++k) {
-          cost += gradWeight(p, k) * huberCost(r[k], d);
-          ss += r[k] * r[k];
-          ++n;
-        }
-      }
-    }
-    if (prior) cost += prior->energy(fr);
-    if (rmse) *rmse = n ? std::sqrt(ss / n) : 0.0;
-    if (count) *count = n;
-    return cost;
-  };
-
-  double cost = totalCost(frames, points, &stats.initial_rmse, &stats.residuals);
+  double c = cost(frames, points, rho, gw, prior, &stats.initial_rmse, &stats.residuals);
   double lambda = cfg_.lambda_initial;
   Eigen::MatrixXd S(dim, dim);
   Eigen::VectorXd s(dim);
   NormalEquations ne;
+  std::vector<double> hpp_d(np);
   for (int it = 0; it < cfg_.iterations; ++it, ++stats.iterations) {
-    accumulate(frames, points, slot, dim, ne);
+    accumulate(frames, points, rho, gw, slot, dim, ne);
     if (prior) {
       // Gradient b + Hx at the current state; Hessian blocks between free frames only.
       const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);
-      const int np = static_cast<int>(prior->frames.size());
-      for (int i = 0; i < np; ++i) {
+      const int npf = static_cast<int>(prior->frames.size());
+      for (int i = 0; i < npf; ++i) {
         const int si = slot[prior->frames[i]];
         if (si < 0) continue;
         ne.bf.segment<8>(si * 8) += g.segment<8>(8 * i);
-        for (int j = 0; j < np; ++j) {
+        for (int j = 0; j < npf; ++j) {
           const int sj = slot[prior->frames[j]];
           if (sj >= 0) ne.Hff.block<8, 8>(si * 8, sj * 8) += prior->H.block<8, 8>(8 * i, 8 * j);
         }
@@ -178,20 +239,20 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
       S.diagonal() *= 1.0 + lambda;
       S.diagonal().array() += 1e-9;
       s = ne.bf;
-      std::vector<double> hpp_d(points.size());
-      for (std::size_t i = 0; i < points.size(); ++i) {
+      for (std::size_t i = 0; i < np; ++i) {
         hpp_d[i] = ne.Hpp[i] * (1.0 + lambda) + 1e-12;
-        if (ne.Hpp[i] <= 0) continue;
-        S.noalias() -= ne.Hfp[i] * ne.Hfp[i].transpose() / hpp_d[i];
-        s.noalias() -= ne.Hfp[i] * (ne.bp[i] / hpp_d[i]);
+        if (ne.Hpp[i] <= 0 || dim == 0) continue;
+        const auto col = ne.Hfp.col(static_cast<Eigen::Index>(i));
+        S.selfadjointView<Eigen::Lower>().rankUpdate(col, -1.0 / hpp_d[i]);
+        s.noalias() -= col * (ne.bp[i] / hpp_d[i]);
       }
+      S.triangularView<Eigen::Upper>() = S.transpose();
       const Eigen::VectorXd df = dim > 0 ? Eigen::VectorXd(-S.ldlt().solve(s)) : Eigen::VectorXd();
       if (!df.allFinite()) {
         lambda *= 10;
         continue;
       }
       std::vector<BaFrame> f_new = frames;
-      std::vector<BaPoint> p_new = points;
       for (int f = 0; f < F; ++f) {
         if (slot[f] < 0) continue;
         const Eigen::Matrix<double, 8, 1> x = df.segment<8>(slot[f] * 8);
@@ -199,18 +260,19 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         f_new[f].a += x[6];
         f_new[f].b += x[7];
       }
-      for (std::size_t i = 0; i < points.size(); ++i) {
+      for (std::size_t i = 0; i < np; ++i) {
+        rho_new[i] = rho[i];
         if (ne.Hpp[i] <= 0) continue;
-        const double dr = -(ne.bp[i] + (dim > 0 ? ne.Hfp[i].dot(df) : 0.0)) / hpp_d[i];
-        p_new[i].inv_depth = std::max(1e-4, points[i].inv_depth + dr);
+        const double dfp = dim > 0 ? ne.Hfp.col(static_cast<Eigen::Index>(i)).dot(df) : 0.0;
+        rho_new[i] = std::max(1e-4, rho[i] - (ne.bp[i] + dfp) / hpp_d[i]);
       }
-      const double cost_new = totalCost(f_new, p_new, nullptr, nullptr);
-      if (cost_new < cost) {
+      const double c_new = cost(f_new, points, rho_new, gw, prior, nullptr, nullptr);
+      if (c_new < c) {
         frames.swap(f_new);
-        points.swap(p_new);
+        rho.swap(rho_new);
         accepted = true;
-        const bool converged = cost - cost_new < 1e-6 * cost;
-        cost = cost_new;
+        const bool converged = c - c_new < 1e-6 * c;
+        c = c_new;
         lambda = std::max(1e-8, lambda * 0.3);
         if (converged) it = cfg_.iterations;
       } else {
@@ -219,70 +281,80 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     }
     if (!accepted) break;
   }
+  for (std::size_t i = 0; i < np; ++i) points[i].inv_depth = rho[i];
   // Outliers: observations whose pattern does not match any more (occlusion, wrong depth).
   Eigen::Matrix<double, 8, 1> r;
+  const PairTransforms pairs(frames);
   for (BaPoint& p : points) {
     if (p.outlier) continue;
-    std::vector<int> keep;
+    std::size_t keep = 0;
     for (int t : p.targets) {
-      if (evaluate(frames, p, t, r, nullptr) && std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
-        keep.push_back(t);
+      if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr) &&
+          std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
+        p.targets[keep++] = t;
       else
         ++stats.outliers_removed;
     }
-    p.targets.swap(keep);
+    p.targets.resize(keep);
     if (p.targets.empty()) p.outlier = true;
   }
-  totalCost(frames, points, &stats.final_rmse, &stats.residuals);
+  cost(frames, points, rho, gw, nullptr, &stats.final_rmse, &stats.residuals);
   return stats;
 }
 
 void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                               const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                                const std::vector<int>& slot, int dim, NormalEquations& ne,
                                int only_host) const {
-  const double d = cfg_.huber, c2 = cfg_.grad_weight_c * cfg_.grad_weight_c;
+  const double d = cfg_.huber;
+  const PairTransforms pairs(frames);
+  const auto np = static_cast<Eigen::Index>(points.size());
   ne.Hff = Eigen::MatrixXd::Zero(dim, dim);
   ne.bf = Eigen::VectorXd::Zero(dim);
   ne.Hpp.assign(points.size(), 0.0);
   ne.bp.assign(points.size(), 0.0);
-  ne.Hfp.resize(points.size());
+  ne.Hfp.setZero(dim, np);
   Eigen::Matrix<double, 8, 1> r;
   Eigen::Matrix<double, 8, 17> J;
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  Eigen::Matrix<double, 8, 8> Jh, Jt;
+  Eigen::Matrix<double, 8, 1> w, Jr;
+  for (Eigen::Index i = 0; i < np; ++i) {
     const BaPoint& p = points[i];
-    ne.Hfp[i] = Eigen::VectorXd::Zero(dim);
     if (p.outlier || (only_host >= 0 && p.host != only_host)) continue;
     if (p.prior_weight > 0) {
       ne.Hpp[i] += p.prior_weight;
-      ne.bp[i] += p.prior_weight * (p.inv_depth - p.prior_inv_depth);
+      ne.bp[i] += p.prior_weight * (rho[i] - p.prior_inv_depth);
     }
     for (int t : p.targets) {
-      if (!evaluate(frames, p, t, r, &J)) continue;
+      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data())) continue;
       const int sh = slot[p.host], st = slot[t];
       for (int k = 0; k < 8; ++k) {
-        double gx, gy;
-        sampleBilinear(frames[p.host].image, p.u + kPattern[k][0], p.v + kPattern[k][1], gx, gy);
         const double a = std::abs(r[k]);
-        const double w = c2 / (c2 + gx * gx + gy * gy) * (a <= d ? 1.0 : d / a);
-        const Eigen::Matrix<double, 1, 8> Jh = J.block<1, 8>(k, 0), Jt = J.block<1, 8>(k, 8);
-        const double Jr = J(k, 16);
-        if (sh >= 0) {
-          ne.Hff.block<8, 8>(sh * 8, sh * 8) += w * Jh.transpose() * Jh;
-          ne.bf.segment<8>(sh * 8) += w * r[k] * Jh.transpose();
-          ne.Hfp[i].segment<8>(sh * 8) += w * Jr * Jh.transpose();
-        }
-        if (st >= 0) {
-          ne.Hff.block<8, 8>(st * 8, st * 8) += w * Jt.transpose() * Jt;
-          ne.bf.segment<8>(st * 8) += w * r[k] * Jt.transpose();
-          ne.Hfp[i].segment<8>(st * 8) += w * Jr * Jt.transpose();
-        }
-        if (sh >= 0 && st >= 0) {
-          ne.Hff.block<8, 8>(sh * 8, st * 8) += w * Jh.transpose() * Jt;
-          ne.Hff.block<8, 8>(st * 8, sh * 8) += w * Jt.transpose() * Jh;
-        }
-        ne.Hpp[i] += w * Jr * Jr;
-        ne.bp[i] += w * Jr * r[k];
+        w[k] = gw[i].w[k] * (a <= d ? 1.0 : d / a);
       }
+      // The 8 pattern rows at once: J^T W J blocks as small matrix products.
+      Jh = J.leftCols<8>();
+      Jt = J.middleCols<8>(8);
+      Jr = J.col(16);
+      const Eigen::Matrix<double, 8, 8> WJh = w.asDiagonal() * Jh, WJt = w.asDiagonal() * Jt;
+      const Eigen::Matrix<double, 8, 1> Wr = w.cwiseProduct(r), WJr = w.cwiseProduct(Jr);
+      if (sh >= 0) {
+        ne.Hff.block<8, 8>(sh * 8, sh * 8).noalias() += Jh.transpose() * WJh;
+        ne.bf.segment<8>(sh * 8).noalias() += Jh.transpose() * Wr;
+        ne.Hfp.col(i).segment<8>(sh * 8).noalias() += Jh.transpose() * WJr;
+      }
+      if (st >= 0) {
+        ne.Hff.block<8, 8>(st * 8, st * 8).noalias() += Jt.transpose() * WJt;
+        ne.bf.segment<8>(st * 8).noalias() += Jt.transpose() * Wr;
+        ne.Hfp.col(i).segment<8>(st * 8).noalias() += Jt.transpose() * WJr;
+      }
+      if (sh >= 0 && st >= 0) {
+        const Eigen::Matrix<double, 8, 8> Hht = Jh.transpose() * WJt;
+        ne.Hff.block<8, 8>(sh * 8, st * 8) += Hht;
+        ne.Hff.block<8, 8>(st * 8, sh * 8) += Hht.transpose();
+      }
+      ne.Hpp[i] += Jr.dot(WJr);
+      ne.bp[i] += Jr.dot(Wr);
     }
   }
 }
@@ -297,13 +369,16 @@ BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std
   for (int f = 0; f < F; ++f) slot[f] = f;
   const int dim = F * kFrameParams;
   NormalEquations ne;
-  accumulate(frames, points, slot, dim, ne, m);
+  std::vector<double> rho(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) rho[i] = points[i].inv_depth;
+  accumulate(frames, points, rho, hostPatterns(frames, points), slot, dim, ne, m);
   Eigen::MatrixXd H = ne.Hff;
   Eigen::VectorXd b = ne.bf;
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (ne.Hpp[i] <= 1e-12) continue;
-    H.noalias() -= ne.Hfp[i] * ne.Hfp[i].transpose() / ne.Hpp[i];
-    b.noalias() -= ne.Hfp[i] * (ne.bp[i] / ne.Hpp[i]);
+    const auto col = ne.Hfp.col(static_cast<Eigen::Index>(i));
+    H.noalias() -= col * col.transpose() / ne.Hpp[i];
+    b.noalias() -= col * (ne.bp[i] / ne.Hpp[i]);
   }
   if (prior && !prior->empty()) {
     const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);

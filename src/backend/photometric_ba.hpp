@@ -12,6 +12,7 @@
 // which is what holds the monocular scale and keeps drift down. The prior's residual Jacobians are
 // taken at the current estimate, not at a first estimate (DSO's FEJ): the window is short and the
 // estimates move little once a keyframe is old enough to be marginalized.
+#include <array>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -70,6 +71,13 @@ struct BaStats {
 };
 
 struct NormalEquations;  // defined in photometric_ba.cpp
+struct PairTransforms;   // defined in photometric_ba.cpp
+
+// Per point: the gradient weight c²/(c²+|∇I|²) and the host intensity of each pattern pixel (both
+// constant during a solve).
+struct HostPattern {
+  std::array<double, 8> w{}, I{};
+};
 
 class PhotometricBA {
  public:
@@ -92,9 +100,20 @@ class PhotometricBA {
                 Eigen::Matrix<double, 8, 1>& r, Eigen::Matrix<double, 8, 17>* J) const;
 
  private:
+  // The residuals of one point in one target at inverse depth rho (evaluate() without the point).
+  // host_values: the 8 host intensities (HostPattern::I), or null to sample them.
+  bool evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host, float u,
+                    float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
+                    Eigen::Matrix<double, 8, 17>* J, const double* host_values = nullptr) const;
+  std::vector<HostPattern> hostPatterns(const std::vector<BaFrame>& frames,
+                                        const std::vector<BaPoint>& points) const;
+  double cost(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+              const std::vector<double>& rho, const std::vector<HostPattern>& gw, const BaPrior* prior,
+              double* rmse, int* count) const;
   // Accumulates the normal equations of the photometric terms (and point priors); frames with
   // slot < 0 are constant. only_host >= 0: only the points hosted in that frame.
   void accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                  const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                   const std::vector<int>& slot, int dim, NormalEquations& ne, int only_host = -1) const;
 
   CameraModel cam_;

@@ -95,7 +95,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   pyramid(frame, img);
   FrameTrackResult res;
   std::vector<double> r, r_new;
-  std::vector<Eigen::Matrix<double, 1, 8>> J;
+  std::vector<Eigen::Matrix<double, 1, 8>> J, J_new;
   const int np = cfg_.affine ? 8 : 6;
   const double d = cfg_.huber;
   const auto cost = [d](const std::vector<double>& rr) {
@@ -123,7 +123,6 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
         if (!delta.allFinite()) break;
         const SE3 T_new = SE3::exp(delta.head<6>()) * T;
         const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
-        std::vector<Eigen::Matrix<double, 1, 8>> J_new;
         if (evaluate(l, img[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
           lambda *= 10;
           continue;
@@ -133,7 +132,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
           T = T_new, alpha = a_new, beta = b_new;
           r.swap(r_new);
           J.swap(J_new);
-          const bool converged = c0 - c1 < 1e-8 * c0 || delta.head<6>().norm() < 1e-7;
+          const bool converged = c0 - c1 < cfg_.convergence * c0 || delta.head<6>().norm() < 1e-7;
           c0 = c1;
           lambda = std::max(1e-6, lambda * 0.3);
           improved = !converged;

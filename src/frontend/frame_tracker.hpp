@@ -19,6 +19,7 @@ struct FrameTrackerConfig {
   bool affine = true;        // estimate α, β (off: brightness constancy)
   double max_rmse = 0.08;    // above this at the finest level: reported as lost
   int min_residuals = 100;
+  double convergence = 1e-8;  // a level ends when the cost falls by less than this fraction
 };
 
 struct FrameTrackResult {

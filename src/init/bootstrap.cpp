@@ -227,18 +227,37 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   if (inliers < cfg_.min_points) return false;
   ref_ = std::move(ref);
   rmse_ = st.final_rmse;
-  // The frames in between: aligned to the new map, starting from the geodesic between the two poses.
+  // The frames in between: aligned to the new map. Starting points: the previous frame's result moved
+  // by the photometric path's relative motion (its rotation is good, its translation is rescaled to the
+  // geometric one), and the geodesic between the reference and the last frame; the better fit wins.
   const SE3 T_ref_last = fr[1].T_w_c;
   FrameTracker tracker(cam_, cfg_.tracker);
   tracker.setKeyframe(ref_);
   const double span = static_cast<double>(t - frames_.front().t);
+  const std::vector<BootstrapFrame> photometric = frames_;
+  const double photo_len = frames_.back().T_ref_c.translation().norm();
+  const double scale = photo_len > 1e-9 ? T_ref_last.translation().norm() / photo_len : 1.0;
+  SE3 T_prev_result;  // reference (k = 0): identity
   for (std::size_t k = 1; k < frames_.size(); ++k) {
-    SE3 T_c_ref =
+    SE3 step = photometric[k - 1].T_ref_c.inverse() * photometric[k].T_ref_c;  // photometric motion k-1 -> k
+    step.translation() *= scale;
+    const SE3 candidates[2] = {
+        (T_prev_result * step).inverse(),
         interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
-            .inverse();
-    double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
-    tracker.track(images_[k], T_c_ref, alpha, beta);
-    frames_[k] = {frames_[k].t, T_c_ref.inverse(), std::log(std::max(alpha, 1e-3)), beta};
+            .inverse()};
+    BootstrapFrame best{frames_[k].t, candidates[0].inverse(), frames_[k].a, frames_[k].b};
+    double best_rmse = 1e9;
+    for (const SE3& T_c_ref : candidates) {
+      double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
+      SE3 T_track = T_c_ref;
+      const FrameTrackResult tr = tracker.track(images_[k], T_track, alpha, beta);
+      if (tr.ok && alpha > 0 && tr.rmse < best_rmse) {
+        best_rmse = tr.rmse;
+        best = {frames_[k].t, T_track.inverse(), std::log(alpha), beta};
+      }
+    }
+    frames_[k] = best;
+    T_prev_result = best.T_ref_c;
   }
   frames_.push_back({t, T_ref_last, fr[1].a, fr[1].b});
   parallax_ = translationParallax(T_ref_last.inverse());

@@ -1,0 +1,145 @@
+// eds run --frames-only end to end: the ESIM plane, a simulated room (map against the true planes) and
+// real frames with distortion (ECD slider_depth).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "eval/ate.hpp"
+#include "io/ply.hpp"
+#include "sim/motion.hpp"
+#include "sim/presets.hpp"
+#include "sim/simulator.hpp"
+#include "sim/writer.hpp"
+#include "system/odometry.hpp"
+#include "test_data.hpp"
+
+namespace eds {
+namespace {
+
+eval::AteResult evaluate(const OdometryResult& r, const Trajectory& gt, double until_s = 0) {
+  eval::EvalConfig ec;
+  ec.alignment = eval::Alignment::kSim3;
+  if (until_s > 0) ec.window = eval::TimeWindow{0, fromSeconds(until_s)};
+  return eval::evaluateAte(r.frames, gt, ec);
+}
+
+TEST(FramesOnly, EsimPlaneFirstSeconds) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  OdometryConfig cfg;
+  cfg.duration_s = 3.0;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  const eval::AteResult a = evaluate(r, seq.groundTruth(), 3.0);
+  std::printf(
+      "[ frames-only esim 3 s ] init %.2f s, %zu keyframes, ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
+      toSeconds(r.init_t - r.first_t), r.keyframes.size(), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
+  EXPECT_LE(a.trans.rmse, 0.003);
+  EXPECT_GE(a.coverage, 0.9);
+  EXPECT_TRUE(r.failures.empty());
+}
+
+TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
+  EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
+  const Sequence seq(dir);
+  const OdometryResult r = runOdometry(seq, {});
+  ASSERT_TRUE(r.initialized);
+  const eval::AteResult a = evaluate(r, seq.groundTruth());
+  std::printf(
+      "[ frames-only slider_depth ] init %.2f s, %zu keyframes, ATE %.3f cm, rot %.3f deg, coverage %.1f "
+      "%%\n",
+      toSeconds(r.init_t - r.first_t), r.keyframes.size(), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
+  EXPECT_LE(a.trans.rmse, 0.03);
+  EXPECT_GE(a.coverage, 0.9);
+}
+
+// Distance from p to the rectangle of a plane.
+double distanceToPlane(const sim::Plane& pl, const Vec3& p) {
+  const Vec3 d = p - pl.center;
+  const double a = std::clamp(d.dot(pl.u), -pl.size_u / 2, pl.size_u / 2);
+  const double b = std::clamp(d.dot(pl.v), -pl.size_v / 2, pl.size_v / 2);
+  return (d - a * pl.u - b * pl.v).norm();
+}
+
+// Issue #5's case: the room preset along the first 8 s of the real poster_6dof motion (smoothed,
+// σ = 50 ms), frames at 20 Hz.
+TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const auto dir = test::tempDir("frames_room");
+  const sim::Motion motion{
+      sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.05), 0.0, 8.0, traj_file.string())};
+  sim::Scene scene = sim::makePreset("room", motion, 3);
+  scene.loadTextures();
+  CameraModel cam;
+  cam.width = 240, cam.height = 180, cam.fx = cam.fy = 200, cam.cx = 119.5, cam.cy = 89.5;
+  sim::SimConfig sc;
+  sc.fps = 20;
+  sc.render_hz = 20;                        // frames only: no need to render between them
+  sc.events.C_pos = sc.events.C_neg = 5.0;  // (almost) no events
+  {
+    sim::EcdWriter writer(dir, false, false);
+    sim::writeEcdCalib(dir / "calib.txt", cam);
+    sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
+    sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);
+    writer.finish();
+  }
+  std::filesystem::remove(dir / "events.txt");  // a frames-only sequence
+  const Sequence seq(dir);
+  const OdometryResult r = runOdometry(seq, {});
+  ASSERT_TRUE(r.initialized);
+  const Trajectory gt = seq.groundTruth();
+  const eval::AteResult a = evaluate(r, gt);
+  std::vector<double> dist, range;
+  Vec3 centre = Vec3::Zero();
+  for (const StampedPose& p : gt) centre += p.T_w_c.translation() / static_cast<double>(gt.size());
+  for (const MapPoint& m : r.map) {
+    const Vec3 p = a.transform.apply(m.p_w);
+    double best = 1e9;
+    for (const sim::Plane& pl : scene.planes) best = std::min(best, distanceToPlane(pl, p));
+    dist.push_back(best);
+    range.push_back((p - centre).norm());
+  }
+  ASSERT_FALSE(dist.empty());
+  std::nth_element(dist.begin(), dist.begin() + dist.size() / 2, dist.end());
+  std::nth_element(range.begin(), range.begin() + range.size() / 2, range.end());
+  const double med = dist[dist.size() / 2], depth = range[range.size() / 2];
+  std::printf(
+      "[ frames-only room 8 s ] ATE %.3f cm, coverage %.1f %%, %zu map points, median distance to the "
+      "planes %.2f cm = %.2f %% of the median depth %.2f m\n",
+      a.trans.rmse * 100, a.coverage * 100, r.map.size(), med * 100, med / depth * 100, depth);
+  EXPECT_GE(r.map.size(), 5000u);
+  EXPECT_LE(med, 0.02 * depth);
+  EXPECT_LE(a.trans.rmse, 0.003);
+  EXPECT_GE(a.coverage, 0.9);
+  // What eds run writes: the map as PLY, read back.
+  writeOdometryOutputs(dir / "out", r, {});
+  EXPECT_EQ(readPly(dir / "out" / "map.ply").xyz.size(), r.map.size());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(FramesOnly, FrameRateSelectionAndBadArguments) {
+  std::vector<FrameRef> frames;
+  for (int i = 0; i < 100; ++i) frames.push_back({fromSeconds(0.04 * i), "f.png"});  // 25 Hz, 4 s
+  EXPECT_EQ(selectFrames(frames, 0, 0, 0).size(), 100u);
+  const auto five = selectFrames(frames, 0, 0, 5.0);
+  ASSERT_EQ(five.size(), 21u);  // 0, 0.2, ..., 4.0 s (the last is nearest 3.96 s)
+  EXPECT_EQ(five[1], 5u);       // 0.2 s
+  EXPECT_EQ(selectFrames(frames, 1.0, 1.0, 0).size(), 26u);  // [1, 2] s inclusive
+  EXPECT_TRUE(selectFrames(frames, 10.0, 0, 0).empty());
+  EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
+  const Sequence seq(dir);
+  OdometryConfig cfg;
+  cfg.frame_rate = -1;
+  EXPECT_THROW(runOdometry(seq, cfg), std::invalid_argument);
+  cfg = {};
+  cfg.start_s = 100;
+  EXPECT_THROW(runOdometry(seq, cfg), InputError);
+  cfg = {};
+  cfg.backend.window = 1;
+  EXPECT_THROW(runOdometry(seq, cfg), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace eds
