@@ -67,11 +67,13 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--ba-iterations", a->cfg.backend.ba.iterations, "Back-end iterations per keyframe")
       ->capture_default_str();
-  cmd->add_option("--min-gradient", a->cfg.points.min_gradient,
+  cmd->add_option("--min-gradient", a->cfg.mapping.points.min_gradient,
                   "Keyframe points: minimum intensity gradient per pixel (intensity in [0, 1])")
       ->capture_default_str();
-  cmd->add_flag("!--no-epipolar-search", a->cfg.epipolar_search,
+  cmd->add_flag("!--no-epipolar-search", a->cfg.mapping.epipolar_search,
                 "New keyframe points take the depth of the nearest projected map point only");
+  cmd->add_flag("!--sync-backend", a->cfg.threaded_backend,
+                "Run the back-end after each keyframe in the tracking thread (deterministic results)");
   cmd->add_flag("--marginalization", a->cfg.backend.marginalize,
                 "Keep old keyframes' information as a prior (experimental: no first-estimate Jacobians yet)");
   cmd->callback([a] { runRun(*a); });

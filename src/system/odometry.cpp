@@ -60,107 +60,38 @@ Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const Came
 class FramesOdometry {
  public:
   FramesOdometry(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res)
-      : cam_(cam), cfg_(cfg), res_(res), window_(cam, cfg.backend), tracker_(cam, cfg.frame_tracker) {}
+      : cam_(cam),
+        cfg_(cfg),
+        res_(res),
+        worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend),
+        tracker_(cam, cfg.frame_tracker) {}
 
-  void addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
-                   std::vector<KeyframePoint> pts_with_depth = {}) {
-    const auto t0 = Clock::now();
-    Keyframe kf;
-    setKeyframeImage(kf, img);
-    if (pts_with_depth.empty()) {
-      // Mapping: the new keyframe's selected pixels take their depth from the window's points.
-      const std::vector<cv::Point> px = selectPointsOnIntensity(kf.image, cfg_.points);
-      const std::vector<ProjectedPoint> proj = projectPoints(window_.worldPoints(), T_w_new, cam_);
-      std::vector<double> rho = fillInverseDepth(px, proj, cfg_.fill);
-      if (cfg_.epipolar_search && !proj.empty()) searchDepths(kf.image, T_w_new, a, b, px, proj, rho);
-      for (std::size_t i = 0; i < px.size(); ++i) {
-        const float I = kf.image.at<float>(px[i].y, px[i].x);
-        if (!(rho[i] > 0) || I > cfg_.bootstrap.max_intensity || I < cfg_.bootstrap.min_intensity) continue;
-        KeyframePoint kp;
-        kp.u = static_cast<float>(px[i].x), kp.v = static_cast<float>(px[i].y);
-        kp.inv_depth = rho[i];
-        pts_with_depth.push_back(kp);
-      }
-    }
-    window_.addKeyframe(next_id_, t, T_w_new, a, b, kf.image, pts_with_depth);
-    res_.mapping_ms.push_back(msSince(t0));
-    ++next_id_;
-    const auto t1 = Clock::now();
-    const BaStats st = window_.optimize();
-    res_.ba_ms.push_back(msSince(t1));
-    if (std::getenv("EDS_DEBUG"))
-      std::fprintf(
-          stderr,
-          "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers\n",
-          next_id_ - 1, toSeconds(t), pts_with_depth.size(), window_.size(), window_.numPoints(),
-          st.initial_rmse, st.final_rmse, st.iterations, st.outliers_removed);
-    res_.window_points.push_back(window_.numPoints());
-    // The tracking reference: the newest keyframe with every window point projected into it.
-    const BaFrame& nf = window_.newest();
-    T_w_kf_ = nf.T_w_c;
-    a_kf_ = nf.a, b_kf_ = nf.b;
-    ref_.image = nf.image;
-    ref_.points = window_.pointsInNewest();
-    if (!ref_.points.empty()) tracker_.setKeyframe(ref_);
-  }
-
-  // Inverse depths of a new keyframe's pixels by epipolar search in the newest and the oldest keyframe
-  // of the window, over the range of the projected map's inverse depths (widened); where neither
-  // keyframe gives a baseline, the filled value stays; where the search fails or the two disagree, the
-  // pixel gets no depth.
-  void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b,
-                    const std::vector<cv::Point>& px, const std::vector<ProjectedPoint>& proj,
-                    std::vector<double>& rho) const {
-    std::vector<double> r;
-    for (const ProjectedPoint& p : proj) r.push_back(p.inv_depth);
-    std::sort(r.begin(), r.end());
-    const double lo = 0.5 * r[r.size() / 50], hi = 2.0 * r[r.size() - 1 - r.size() / 50];
-    const SearchFrame host{&img, T_w_new, a, b};
-    const auto& fr = window_.frames();
-    std::vector<std::vector<EpipolarMatch>> m;
-    for (std::size_t k : {fr.size() - 1, std::size_t{0}}) {
-      m.push_back(
-          epipolarSearch(host, {&fr[k].image, fr[k].T_w_c, fr[k].a, fr[k].b}, cam_, px, lo, hi, cfg_.search));
-      if (fr.size() == 1) break;
-    }
-    for (std::size_t i = 0; i < px.size(); ++i) {
-      const EpipolarMatch* best = nullptr;
-      bool conflict = false, baseline = false;
-      for (const auto& mk : m) {
-        baseline = baseline || mk[i].line_px >= cfg_.search.min_line_px;
-        if (!(mk[i].inv_depth > 0)) continue;
-        if (best && std::abs(best->inv_depth - mk[i].inv_depth) >
-                        cfg_.search_max_disagreement * std::max(best->inv_depth, mk[i].inv_depth))
-          conflict = true;
-        if (!best || mk[i].line_px > best->line_px) best = &mk[i];
-      }
-      if (best && !conflict)
-        rho[i] = best->inv_depth;
-      else if (baseline)
-        rho[i] = 0;
-    }
+  // Hands a keyframe to the back-end (mapping + BA). Returns the pose of the keyframe's frame: the
+  // optimized one when the back-end ran at once (synchronous), else the given one.
+  SE3 addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
+                  std::vector<KeyframePoint> pts_with_depth = {}) {
+    worker_.submit({t, img, T_w_new, a, b, std::move(pts_with_depth)});
+    if (cfg_.threaded_backend) return T_w_new;
+    adoptReference(false);
+    return T_w_kf_;
   }
 
   // Tracks a frame; returns its pose. Adds a keyframe when the policy asks.
   SE3 track(TimeNs t, const cv::Mat& img) {
-    // Constant-velocity prediction from the last two frames.
-    SE3 T_w_pred = last_T_w_f_;
-    if (has_prev_) T_w_pred = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+    adoptReference(!has_ref_);
     const auto t0 = Clock::now();
-    SE3 T_f_kf = T_w_pred.inverse() * T_w_kf_;
-    double alpha = alpha_, beta = beta_;
-    FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta);
-    if (!tr.ok) {
-      // Other starting points, as DSO tries: no motion since the last frame, then half the velocity.
-      for (const SE3& T_w_try : {last_T_w_f_, interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5)}) {
-        SE3 T_try = T_w_try.inverse() * T_w_kf_;
-        double a_try = alpha_, b_try = beta_;
-        const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
-        if (tr2.ok || tr2.rmse < tr.rmse) {
-          T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
-          if (tr.ok) break;
-        }
-      }
+    SE3 T_f_kf;
+    double alpha = 1, beta = 0;
+    FrameTrackResult tr = align(img, T_f_kf, alpha, beta);
+    Flow fl = flowOf(ref_.points, T_f_kf, cam_);
+    bool new_kf = wantKeyframe(fl, alpha);
+    if (new_kf && worker_.busy()) {
+      // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
+      // run away from its map), take the new reference and track again against it.
+      adoptReference(true);
+      tr = align(img, T_f_kf, alpha, beta);
+      fl = flowOf(ref_.points, T_f_kf, cam_);
+      new_kf = wantKeyframe(fl, alpha);
     }
     res_.track_ms.push_back(msSince(t0));
     if (tr.ok) {
@@ -171,21 +102,12 @@ class FramesOdometry {
       if (!(alpha > 0)) alpha = alpha_, beta = beta_;
     }
     const SE3 T_w_f = T_w_kf_ * T_f_kf.inverse();
-    const Flow fl = flowOf(ref_.points, T_f_kf, cam_);
-    const double wh = cam_.width + cam_.height;
-    const bool new_kf = fl.t > cfg_.policy.flow_t * wh || fl.rt > cfg_.policy.flow_rt * wh ||
-                        fl.in_view < cfg_.policy.min_in_view ||
-                        std::abs(std::log(alpha)) > cfg_.policy.max_log_alpha;
+    // α, β relate the frame to the keyframe (I_f = α I_kf + β); the window's per-frame (a, b) are
+    // absolute: α = e^{a_f − a_kf}, β = b_f − α b_kf.
+    a_last_ = a_kf_ + std::log(alpha), b_last_ = beta + alpha * b_kf_;
+    alpha_ = alpha, beta_ = beta;
     SE3 T_w_out = T_w_f;
-    if (new_kf) {
-      // α, β relate the frame to the keyframe (I_f = α I_kf + β); the window's per-frame (a, b) are
-      // absolute: α = e^{a_f − a_kf}, β = b_f − α b_kf.
-      addKeyframe(t, img, T_w_f, a_kf_ + std::log(alpha), beta + alpha * b_kf_);
-      T_w_out = window_.newest().T_w_c;
-      alpha_ = 1.0, beta_ = 0.0;
-    } else {
-      alpha_ = alpha, beta_ = beta;
-    }
+    if (new_kf) T_w_out = addKeyframe(t, img, T_w_f, a_last_, b_last_);
     setLast(T_w_out);
     return T_w_out;
   }
@@ -195,21 +117,67 @@ class FramesOdometry {
     last_T_w_f_ = T_w_f;
     has_last_ = true;
   }
+  void setLastBrightness(double a, double b) { a_last_ = a, b_last_ = b; }
 
-  SlidingWindow& window() { return window_; }
+  BackendWorker& worker() { return worker_; }
 
  private:
+  // Takes the newest reference the back-end published (waiting for it if asked).
+  void adoptReference(bool wait) {
+    if (wait) worker_.waitIdle();
+    std::optional<TrackingReference> ref = worker_.takeReference();
+    if (!ref) return;
+    T_w_kf_ = ref->kf.T_w_kf;
+    a_kf_ = ref->a, b_kf_ = ref->b;
+    ref_ = std::move(ref->kf);
+    has_ref_ = !ref_.points.empty();
+    if (has_ref_) tracker_.setKeyframe(ref_);
+    // The last frame's brightness, relative to the new reference.
+    alpha_ = std::exp(a_last_ - a_kf_), beta_ = b_last_ - alpha_ * b_kf_;
+  }
+
+  bool wantKeyframe(const Flow& fl, double alpha) const {
+    const double wh = cam_.width + cam_.height;
+    return fl.t > cfg_.policy.flow_t * wh || fl.rt > cfg_.policy.flow_rt * wh ||
+           fl.in_view < cfg_.policy.min_in_view || std::abs(std::log(alpha)) > cfg_.policy.max_log_alpha;
+  }
+
+  // Aligns the frame to the reference from a constant-velocity prediction, trying DSO's other starting
+  // points when that fails.
+  FrameTrackResult align(const cv::Mat& img, SE3& T_f_kf, double& alpha, double& beta) {
+    SE3 T_w_pred = last_T_w_f_;
+    if (has_prev_) T_w_pred = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+    T_f_kf = T_w_pred.inverse() * T_w_kf_;
+    alpha = alpha_, beta = beta_;
+    if (!has_ref_) return {};
+    FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta);
+    if (!tr.ok) {
+      // No motion since the last frame, then half the velocity.
+      for (const SE3& T_w_try : {last_T_w_f_, interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5)}) {
+        SE3 T_try = T_w_try.inverse() * T_w_kf_;
+        double a_try = alpha_, b_try = beta_;
+        const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
+        if (tr2.ok || tr2.rmse < tr.rmse) {
+          T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
+          if (tr.ok) break;
+        }
+      }
+    }
+    return tr;
+  }
+
   CameraModel cam_;
   const OdometryConfig& cfg_;
   OdometryResult& res_;
-  SlidingWindow window_;
+  BackendWorker worker_;
   FrameTracker tracker_;
   Keyframe ref_;
+  bool has_ref_ = false;
   SE3 T_w_kf_;
   double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;
+  double a_last_ = 0, b_last_ = 0;  // absolute brightness of the last frame
   SE3 last_T_w_f_, prev_T_w_f_;
   bool has_last_ = false, has_prev_ = false;
-  int next_id_ = 0;
 };
 
 }  // namespace
@@ -271,8 +239,8 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
       for (std::size_t k = 0; k + 1 < boot.frames().size(); ++k)
         res.frames.push_back({boot.frames()[k].t, boot.frames()[k].T_ref_c});
       odo.setLast(boot.frames()[boot.frames().size() - 2].T_ref_c);
-      odo.addKeyframe(t, img, last.T_ref_c, last.a, last.b);
-      const SE3 T_w_f = odo.window().newest().T_w_c;
+      odo.setLastBrightness(last.a, last.b);
+      const SE3 T_w_f = odo.addKeyframe(t, img, last.T_ref_c, last.a, last.b);
       odo.setLast(T_w_f);
       res.frames.push_back({t, T_w_f});
       res.tracked += boot.frames().size();
@@ -280,11 +248,17 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
     }
     res.frames.push_back({t, odo.track(t, img)});
   }
-  odo.window().flush();
-  for (const RetiredKeyframe& k : odo.window().retiredKeyframes()) res.keyframes.push_back({k.t, k.T_w_kf});
+  odo.worker().waitIdle();
+  SlidingWindow& window = odo.worker().window();
+  window.flush();
+  const BackendTimings& bt = odo.worker().timings();
+  res.mapping_ms = bt.mapping_ms;
+  res.ba_ms = bt.ba_ms;
+  res.window_points = bt.window_points;
+  for (const RetiredKeyframe& k : window.retiredKeyframes()) res.keyframes.push_back({k.t, k.T_w_kf});
   std::sort(res.keyframes.begin(), res.keyframes.end(),
             [](const auto& a, const auto& b) { return a.t < b.t; });
-  res.map = odo.window().retiredPoints();
+  res.map = window.retiredPoints();
   res.sequence_s = toSeconds(last_t - res.first_t);
   res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();
   res.peak_rss_mb = peakRssMb();
@@ -342,7 +316,8 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"duration_s", cfg.duration_s},
                  {"window", cfg.backend.window},
                  {"points_per_keyframe", cfg.backend.points_per_keyframe},
-                 {"marginalize", cfg.backend.marginalize}};
+                 {"marginalize", cfg.backend.marginalize},
+                 {"threaded_backend", cfg.threaded_backend}};
   std::ofstream out(dir / "summary.json");
   if (!out) throw InputError((dir / "summary.json").string(), "cannot open for writing");
   out << j.dump(2) << "\n";

@@ -2,8 +2,8 @@
 // The odometry pipeline. Today: the frame half of EDS (`eds run --frames-only`, issue #5): bootstrap on
 // frames, direct alignment of every frame to the newest keyframe (constant-velocity prediction),
 // keyframes by DSO's optical-flow criterion, mapping by depth transfer and k-d tree fill, and the
-// sliding-window photometric bundle adjustment with marginalization. The back-end runs synchronously
-// after each new keyframe (deterministic results); the event front-end joins in issue #6.
+// sliding-window photometric bundle adjustment (system/backend_worker.hpp: in its own thread by default).
+// The event front-end joins in issue #6.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -15,6 +15,7 @@
 #include "io/sequence.hpp"
 #include "mapping/depth_fill.hpp"
 #include "mapping/epipolar_search.hpp"
+#include "system/backend_worker.hpp"
 
 namespace eds {
 
@@ -30,14 +31,12 @@ struct FlowKeyframePolicyConfig {
 struct OdometryConfig {
   BootstrapConfig bootstrap;
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
-  PointSelectionConfig points{
-      .tile = 8, .fraction = 0.06, .min_gradient = 0.01, .border = 4, .max_points = 0};
-  DepthFillConfig fill;
-  EpipolarSearchConfig search;
-  bool epipolar_search = true;           // new points' depth by search in older keyframes (off: fill only)
-  double search_max_disagreement = 0.2;  // two keyframes' inverse depths differ more: point dropped
+  MappingConfig mapping;
   BackendConfig backend;
   FlowKeyframePolicyConfig policy;
+  // The back-end in its own thread (tracking never waits for it, except when a keyframe is due while
+  // the previous one is still being mapped). Off: after each keyframe, deterministic results.
+  bool threaded_backend = true;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate
   double start_s = 0;     // skip this much from the first frame
   double duration_s = 0;  // 0: to the end

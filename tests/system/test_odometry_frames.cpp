@@ -30,6 +30,7 @@ TEST(FramesOnly, EsimPlaneFirstSeconds) {
   const Sequence seq(dir);
   OdometryConfig cfg;
   cfg.duration_s = 3.0;
+  cfg.threaded_backend = false;  // deterministic
   const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
   const eval::AteResult a = evaluate(r, seq.groundTruth(), 3.0);
@@ -41,6 +42,7 @@ TEST(FramesOnly, EsimPlaneFirstSeconds) {
   EXPECT_TRUE(r.failures.empty());
 }
 
+// With the back-end in its own thread (the default), on real frames.
 TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
   EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
   const Sequence seq(dir);
@@ -87,7 +89,9 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   }
   std::filesystem::remove(dir / "events.txt");  // a frames-only sequence
   const Sequence seq(dir);
-  const OdometryResult r = runOdometry(seq, {});
+  OdometryConfig cfg;
+  cfg.threaded_backend = false;  // deterministic
+  const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
   const Trajectory gt = seq.groundTruth();
   const eval::AteResult a = evaluate(r, gt);

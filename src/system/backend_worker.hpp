@@ -1,0 +1,92 @@
+#pragma once
+// The back-end side of the odometry: mapping a new keyframe (point selection, depth transfer and
+// epipolar search against the window) and the sliding-window bundle adjustment, in a thread of its
+// own so that frame tracking never waits for it (paper Fig. 2; DSO's mapping thread). The front-end
+// submits a keyframe and goes on tracking against the previous reference; when the worker has mapped
+// and optimized the keyframe it publishes a new tracking reference (the newest keyframe with every
+// window point projected into it), which the front-end picks up at its next frame.
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "backend/sliding_window.hpp"
+#include "frontend/point_selection.hpp"
+#include "mapping/depth_fill.hpp"
+#include "mapping/epipolar_search.hpp"
+
+namespace eds {
+
+struct MappingConfig {
+  PointSelectionConfig points{
+      .tile = 8, .fraction = 0.06, .min_gradient = 0.01, .border = 4, .max_points = 0};
+  DepthFillConfig fill;
+  EpipolarSearchConfig search;
+  bool epipolar_search = true;           // new points' depth by search in older keyframes (off: fill only)
+  double search_max_disagreement = 0.2;  // two keyframes' inverse depths differ more: point dropped
+  double min_intensity = 0.02, max_intensity = 0.98;  // black or saturated pixels are not selected
+};
+
+struct KeyframeJob {
+  TimeNs t = 0;
+  cv::Mat image;  // undistorted, CV_32F in [0, 1]
+  SE3 T_w_kf;
+  double a = 0, b = 0;
+  std::vector<KeyframePoint> points;  // with depth already (bootstrap), or empty: mapping selects them
+};
+
+// What the front-end tracks against.
+struct TrackingReference {
+  int id = -1;
+  Keyframe kf;  // image and points (window points projected into it, with inverse depths)
+  double a = 0, b = 0;
+};
+
+struct BackendTimings {
+  std::vector<double> mapping_ms, ba_ms;
+  std::vector<int> window_points;
+};
+
+class BackendWorker {
+ public:
+  BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping, const BackendConfig& backend,
+                bool threaded);
+  ~BackendWorker();
+  BackendWorker(const BackendWorker&) = delete;
+  BackendWorker& operator=(const BackendWorker&) = delete;
+
+  // Queues a keyframe (threaded) or processes it at once.
+  void submit(KeyframeJob job);
+  bool busy() const;
+  void waitIdle();
+  // The newest reference published since the last call, if any.
+  std::optional<TrackingReference> takeReference();
+  // After waitIdle(): the window (for outputs) and the timings.
+  SlidingWindow& window() { return window_; }
+  const BackendTimings& timings() const { return timings_; }
+
+ private:
+  void run();
+  void process(KeyframeJob& job);
+  void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b,
+                    const std::vector<cv::Point>& px, const std::vector<ProjectedPoint>& proj,
+                    std::vector<double>& rho) const;
+
+  CameraModel cam_;
+  MappingConfig mcfg_;
+  SlidingWindow window_;
+  BackendTimings timings_;
+  int next_id_ = 0;
+
+  bool threaded_;
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<KeyframeJob> queue_;
+  bool working_ = false, stop_ = false;
+  std::optional<TrackingReference> published_;
+  std::thread thread_;
+};
+
+}  // namespace eds
