@@ -72,6 +72,12 @@ void addRunCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("!--no-epipolar-search", a->cfg.mapping.epipolar_search,
                 "New keyframe points take the depth of the nearest projected map point only");
+  cmd->add_option("--kf-flow-t", a->cfg.policy.flow_t,
+                  "New keyframe when the RMS flow of the translation exceeds this fraction of width + height")
+      ->capture_default_str();
+  cmd->add_option("--kf-flow-rt", a->cfg.policy.flow_rt,
+                  "New keyframe when the RMS flow of the whole motion exceeds this fraction of width + height")
+      ->capture_default_str();
   cmd->add_flag("!--sync-backend", a->cfg.threaded_backend,
                 "Run the back-end after each keyframe in the tracking thread (deterministic results)");
   cmd->add_flag("--marginalization", a->cfg.backend.marginalize,

@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
 #include "io/ply.hpp"
+#include "system/frame_frontend.hpp"
 
 namespace eds {
 
@@ -28,157 +29,6 @@ double peakRssMb() {
   getrusage(RUSAGE_SELF, &ru);
   return ru.ru_maxrss / 1024.0;  // kB on Linux
 }
-
-// RMS pixel flow of the keyframe's points under T_f_kf, and of its translation alone; the fraction
-// of points still in view.
-struct Flow {
-  double rt = 0, t = 0, in_view = 0;
-};
-Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const CameraModel& cam) {
-  Flow f;
-  const Mat3 R = T_f_kf.rotationMatrix();
-  const Vec3 t = T_f_kf.translation();
-  double ss_rt = 0, ss_t = 0;
-  int n = 0, in = 0;
-  for (const KeyframePoint& p : pts) {
-    if (!(p.inv_depth > 0)) continue;
-    const Vec3 x((p.u - cam.cx) / cam.fx, (p.v - cam.cy) / cam.fy, 1.0);
-    const Vec3 q_rt = R * x + t * p.inv_depth, q_t = x + t * p.inv_depth;  // scaled by ρ
-    ++n;
-    if (q_rt.z() <= 1e-9 || q_t.z() <= 1e-9) continue;
-    const double u = cam.fx * q_rt.x() / q_rt.z() + cam.cx, v = cam.fy * q_rt.y() / q_rt.z() + cam.cy;
-    const double ut = cam.fx * q_t.x() / q_t.z() + cam.cx, vt = cam.fy * q_t.y() / q_t.z() + cam.cy;
-    ss_rt += (u - p.u) * (u - p.u) + (v - p.v) * (v - p.v);
-    ss_t += (ut - p.u) * (ut - p.u) + (vt - p.v) * (vt - p.v);
-    in += u >= 0 && v >= 0 && u <= cam.width - 1 && v <= cam.height - 1;
-  }
-  if (n == 0) return f;
-  f.rt = std::sqrt(ss_rt / n), f.t = std::sqrt(ss_t / n), f.in_view = static_cast<double>(in) / n;
-  return f;
-}
-
-class FramesOdometry {
- public:
-  FramesOdometry(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res)
-      : cam_(cam),
-        cfg_(cfg),
-        res_(res),
-        worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend),
-        tracker_(cam, cfg.frame_tracker) {}
-
-  // Hands a keyframe to the back-end (mapping + BA). Returns the pose of the keyframe's frame: the
-  // optimized one when the back-end ran at once (synchronous), else the given one.
-  SE3 addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
-                  std::vector<KeyframePoint> pts_with_depth = {}) {
-    worker_.submit({t, img, T_w_new, a, b, std::move(pts_with_depth)});
-    if (cfg_.threaded_backend) return T_w_new;
-    adoptReference(false);
-    return T_w_kf_;
-  }
-
-  // Tracks a frame; returns its pose. Adds a keyframe when the policy asks.
-  SE3 track(TimeNs t, const cv::Mat& img) {
-    adoptReference(!has_ref_);
-    const auto t0 = Clock::now();
-    SE3 T_f_kf;
-    double alpha = 1, beta = 0;
-    FrameTrackResult tr = align(img, T_f_kf, alpha, beta);
-    Flow fl = flowOf(ref_.points, T_f_kf, cam_);
-    bool new_kf = wantKeyframe(fl, alpha);
-    if (new_kf && worker_.busy()) {
-      // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
-      // run away from its map), take the new reference and track again against it.
-      adoptReference(true);
-      tr = align(img, T_f_kf, alpha, beta);
-      fl = flowOf(ref_.points, T_f_kf, cam_);
-      new_kf = wantKeyframe(fl, alpha);
-    }
-    res_.track_ms.push_back(msSince(t0));
-    if (tr.ok) {
-      ++res_.tracked;
-    } else {
-      res_.failures.push_back({t, "frame alignment failed (rmse " + std::to_string(tr.rmse) + ", " +
-                                      std::to_string(tr.residuals) + " residuals)"});
-      if (!(alpha > 0)) alpha = alpha_, beta = beta_;
-    }
-    const SE3 T_w_f = T_w_kf_ * T_f_kf.inverse();
-    // α, β relate the frame to the keyframe (I_f = α I_kf + β); the window's per-frame (a, b) are
-    // absolute: α = e^{a_f − a_kf}, β = b_f − α b_kf.
-    a_last_ = a_kf_ + std::log(alpha), b_last_ = beta + alpha * b_kf_;
-    alpha_ = alpha, beta_ = beta;
-    SE3 T_w_out = T_w_f;
-    if (new_kf) T_w_out = addKeyframe(t, img, T_w_f, a_last_, b_last_);
-    setLast(T_w_out);
-    return T_w_out;
-  }
-
-  void setLast(const SE3& T_w_f) {
-    if (has_last_) prev_T_w_f_ = last_T_w_f_, has_prev_ = true;
-    last_T_w_f_ = T_w_f;
-    has_last_ = true;
-  }
-  void setLastBrightness(double a, double b) { a_last_ = a, b_last_ = b; }
-
-  BackendWorker& worker() { return worker_; }
-
- private:
-  // Takes the newest reference the back-end published (waiting for it if asked).
-  void adoptReference(bool wait) {
-    if (wait) worker_.waitIdle();
-    std::optional<TrackingReference> ref = worker_.takeReference();
-    if (!ref) return;
-    T_w_kf_ = ref->kf.T_w_kf;
-    a_kf_ = ref->a, b_kf_ = ref->b;
-    ref_ = std::move(ref->kf);
-    has_ref_ = !ref_.points.empty();
-    if (has_ref_) tracker_.setKeyframe(ref_);
-    // The last frame's brightness, relative to the new reference.
-    alpha_ = std::exp(a_last_ - a_kf_), beta_ = b_last_ - alpha_ * b_kf_;
-  }
-
-  bool wantKeyframe(const Flow& fl, double alpha) const {
-    const double wh = cam_.width + cam_.height;
-    return fl.t > cfg_.policy.flow_t * wh || fl.rt > cfg_.policy.flow_rt * wh ||
-           fl.in_view < cfg_.policy.min_in_view || std::abs(std::log(alpha)) > cfg_.policy.max_log_alpha;
-  }
-
-  // Aligns the frame to the reference from a constant-velocity prediction, trying DSO's other starting
-  // points when that fails.
-  FrameTrackResult align(const cv::Mat& img, SE3& T_f_kf, double& alpha, double& beta) {
-    SE3 T_w_pred = last_T_w_f_;
-    if (has_prev_) T_w_pred = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
-    T_f_kf = T_w_pred.inverse() * T_w_kf_;
-    alpha = alpha_, beta = beta_;
-    if (!has_ref_) return {};
-    FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta);
-    if (!tr.ok) {
-      // No motion since the last frame, then half the velocity.
-      for (const SE3& T_w_try : {last_T_w_f_, interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5)}) {
-        SE3 T_try = T_w_try.inverse() * T_w_kf_;
-        double a_try = alpha_, b_try = beta_;
-        const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
-        if (tr2.ok || tr2.rmse < tr.rmse) {
-          T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
-          if (tr.ok) break;
-        }
-      }
-    }
-    return tr;
-  }
-
-  CameraModel cam_;
-  const OdometryConfig& cfg_;
-  OdometryResult& res_;
-  BackendWorker worker_;
-  FrameTracker tracker_;
-  Keyframe ref_;
-  bool has_ref_ = false;
-  SE3 T_w_kf_;
-  double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;
-  double a_last_ = 0, b_last_ = 0;  // absolute brightness of the last frame
-  SE3 last_T_w_f_, prev_T_w_f_;
-  bool has_last_ = false, has_prev_ = false;
-};
 
 }  // namespace
 
@@ -212,7 +62,7 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
   const Undistorter und(seq.camera());
   const CameraModel& cam = und.pinhole();
   OdometryResult res;
-  FramesOdometry odo(cam, cfg, res);
+  FrameFrontend odo(cam, cfg, res);
   Bootstrap boot(cam, cfg.bootstrap);
   const std::vector<std::size_t> idx =
       selectFrames(seq.frames(), cfg.start_s, cfg.duration_s, cfg.frame_rate);

@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
+#include "frontend/event_packets.hpp"
 #include "mapping/depth_fill.hpp"
 
 namespace eds {
@@ -20,36 +21,6 @@ using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
-
-// Hands out packets of N events every `stride` events from a streaming source, keeping only a
-// bounded window of events in memory.
-class PacketStream {
- public:
-  PacketStream(EventSource& src, std::size_t n, std::size_t stride) : src_(src), n_(n), stride_(stride) {}
-  bool next(const EventArray*& events, std::size_t& begin) {
-    while (buf_.size() < pos_ + n_) {
-      if (pos_ > (1u << 20)) compact();
-      if (src_.read(buf_, 1 << 18) == 0) return false;
-    }
-    events = &buf_;
-    begin = pos_;
-    pos_ += stride_;
-    return true;
-  }
-
- private:
-  void compact() {
-    const auto d = static_cast<std::ptrdiff_t>(pos_);
-    buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
-    buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
-    buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
-    buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
-    pos_ = 0;
-  }
-  EventSource& src_;
-  std::size_t n_, stride_, pos_ = 0;
-  EventArray buf_;
-};
 
 // Pose at time t from a trajectory sorted by time: interpolated inside, the nearest end outside.
 SE3 poseAt(const Trajectory& traj, TimeNs t) {
@@ -175,7 +146,8 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
       cfg.duration_s > 0 ? frames[0].t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
 
   auto src = seq.openEvents();
-  PacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events), cfg.event_frame.stride());
+  EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
+                            cfg.event_frame.stride());
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;

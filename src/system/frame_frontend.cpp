@@ -1,0 +1,143 @@
+#include "system/frame_frontend.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+namespace eds {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+}  // namespace
+
+Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const CameraModel& cam) {
+  Flow f;
+  const Mat3 R = T_f_kf.rotationMatrix();
+  const Vec3 t = T_f_kf.translation();
+  double ss_rt = 0, ss_t = 0;
+  int n = 0, in = 0;
+  for (const KeyframePoint& p : pts) {
+    if (!(p.inv_depth > 0)) continue;
+    const Vec3 x((p.u - cam.cx) / cam.fx, (p.v - cam.cy) / cam.fy, 1.0);
+    const Vec3 q_rt = R * x + t * p.inv_depth, q_t = x + t * p.inv_depth;  // scaled by ρ
+    ++n;
+    if (q_rt.z() <= 1e-9 || q_t.z() <= 1e-9) continue;
+    const double u = cam.fx * q_rt.x() / q_rt.z() + cam.cx, v = cam.fy * q_rt.y() / q_rt.z() + cam.cy;
+    const double ut = cam.fx * q_t.x() / q_t.z() + cam.cx, vt = cam.fy * q_t.y() / q_t.z() + cam.cy;
+    ss_rt += (u - p.u) * (u - p.u) + (v - p.v) * (v - p.v);
+    ss_t += (ut - p.u) * (ut - p.u) + (vt - p.v) * (vt - p.v);
+    in += u >= 0 && v >= 0 && u <= cam.width - 1 && v <= cam.height - 1;
+  }
+  if (n == 0) return f;
+  f.rt = std::sqrt(ss_rt / n), f.t = std::sqrt(ss_t / n), f.in_view = static_cast<double>(in) / n;
+  return f;
+}
+
+FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res)
+    : cam_(cam),
+      cfg_(cfg),
+      res_(res),
+      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend),
+      tracker_(cam, cfg.frame_tracker) {}
+
+SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
+                               std::vector<KeyframePoint> pts_with_depth) {
+  worker_.submit({t, img, T_w_new, a, b, std::move(pts_with_depth)});
+  if (cfg_.threaded_backend) return T_w_new;
+  adoptReference(false);
+  return T_w_kf_;
+}
+
+SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
+  adoptReference(!has_ref_);
+  const auto t0 = Clock::now();
+  SE3 T_f_kf;
+  double alpha = 1, beta = 0;
+  FrameTrackResult tr = align(img, prior, T_f_kf, alpha, beta);
+  Flow fl = flowOf(ref_.points, T_f_kf, cam_);
+  bool new_kf = wantKeyframe(fl, alpha);
+  if (new_kf && worker_.busy()) {
+    // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
+    // run away from its map), take the new reference and track again against it.
+    adoptReference(true);
+    tr = align(img, prior, T_f_kf, alpha, beta);
+    fl = flowOf(ref_.points, T_f_kf, cam_);
+    new_kf = wantKeyframe(fl, alpha);
+  }
+  res_.track_ms.push_back(msSince(t0));
+  last_ok_ = tr.ok;
+  if (tr.ok) {
+    ++res_.tracked;
+  } else {
+    res_.failures.push_back({t, "frame alignment failed (rmse " + std::to_string(tr.rmse) + ", " +
+                                    std::to_string(tr.residuals) + " residuals)"});
+    if (!(alpha > 0)) alpha = alpha_, beta = beta_;
+  }
+  const SE3 T_w_f = T_w_kf_ * T_f_kf.inverse();
+  // α, β relate the frame to the keyframe (I_f = α I_kf + β); the window's per-frame (a, b) are
+  // absolute: α = e^{a_f − a_kf}, β = b_f − α b_kf.
+  a_last_ = a_kf_ + std::log(alpha), b_last_ = beta + alpha * b_kf_;
+  alpha_ = alpha, beta_ = beta;
+  SE3 T_w_out = T_w_f;
+  if (new_kf && tr.ok) T_w_out = addKeyframe(t, img, T_w_f, a_last_, b_last_);
+  setLast(T_w_out);
+  return T_w_out;
+}
+
+void FrameFrontend::setLast(const SE3& T_w_f) {
+  if (has_last_) prev_T_w_f_ = last_T_w_f_, has_prev_ = true;
+  last_T_w_f_ = T_w_f;
+  has_last_ = true;
+}
+
+bool FrameFrontend::adoptReference(bool wait) {
+  if (wait) worker_.waitIdle();
+  std::optional<TrackingReference> ref = worker_.takeReference();
+  if (!ref) return false;
+  T_w_kf_ = ref->kf.T_w_kf;
+  a_kf_ = ref->a, b_kf_ = ref->b;
+  ref_ = std::move(ref->kf);
+  ref_id_ = ref->id;
+  has_ref_ = !ref_.points.empty();
+  if (has_ref_) tracker_.setKeyframe(ref_);
+  // The last frame's brightness, relative to the new reference.
+  alpha_ = std::exp(a_last_ - a_kf_), beta_ = b_last_ - alpha_ * b_kf_;
+  return true;
+}
+
+bool FrameFrontend::wantKeyframe(const Flow& fl, double alpha) const {
+  const double wh = cam_.width + cam_.height;
+  return fl.t > cfg_.policy.flow_t * wh || fl.rt > cfg_.policy.flow_rt * wh ||
+         fl.in_view < cfg_.policy.min_in_view || std::abs(std::log(alpha)) > cfg_.policy.max_log_alpha;
+}
+
+// Aligns the frame to the reference from the prior (the event pose) or a constant-velocity
+// prediction, trying DSO's other starting points when that fails.
+FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha,
+                                      double& beta) {
+  SE3 T_w_pred = last_T_w_f_;
+  if (has_prev_) T_w_pred = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+  if (prior) T_w_pred = *prior;
+  T_f_kf = T_w_pred.inverse() * T_w_kf_;
+  alpha = alpha_, beta = beta_;
+  if (!has_ref_) return {};
+  FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta);
+  if (!tr.ok) {
+    // No motion since the last frame, then half the velocity.
+    for (const SE3& T_w_try : {last_T_w_f_, interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5)}) {
+      SE3 T_try = T_w_try.inverse() * T_w_kf_;
+      double a_try = alpha_, b_try = beta_;
+      const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
+      if (tr2.ok || tr2.rmse < tr.rmse) {
+        T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
+        if (tr.ok) break;
+      }
+    }
+  }
+  return tr;
+}
+
+}  // namespace eds

@@ -1,0 +1,64 @@
+#pragma once
+// The frame half of the front-end: every frame is aligned to the newest keyframe reference
+// (FrameTracker; seeded by a constant-velocity prediction, or by the event tracker's pose in EDS), DSO's
+// optical-flow keyframe rule decides when to hand a keyframe to the back-end (BackendWorker), and
+// references the back-end publishes are taken up at the next frame.
+#include <optional>
+
+#include "frontend/frame_tracker.hpp"
+#include "system/backend_worker.hpp"
+#include "system/odometry.hpp"
+
+namespace eds {
+
+// RMS pixel flow of the keyframe's points under T_f_kf, and of its translation alone; the fraction
+// of points still in view.
+struct Flow {
+  double rt = 0, t = 0, in_view = 0;
+};
+Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const CameraModel& cam);
+
+class FrameFrontend {
+ public:
+  FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res);
+
+  // Hands a keyframe to the back-end (mapping + BA). Returns the pose of the keyframe's frame: the
+  // optimized one when the back-end ran at once (synchronous), else the given one.
+  SE3 addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
+                  std::vector<KeyframePoint> pts_with_depth = {});
+  // Tracks a frame; returns its pose. `prior`: a pose for the frame from elsewhere (the event tracker),
+  // tried first. Adds a keyframe when the policy asks.
+  SE3 track(TimeNs t, const cv::Mat& img, const SE3* prior = nullptr);
+  bool lastTrackOk() const { return last_ok_; }
+
+  void setLast(const SE3& T_w_f);
+  void setLastBrightness(double a, double b) { a_last_ = a, b_last_ = b; }
+  // Takes the newest reference the back-end published (waiting for it if asked); true if it changed.
+  bool adoptReference(bool wait);
+  // The current tracking reference (keyframe image, points with inverse depth) and its pose.
+  const Keyframe& reference() const { return ref_; }
+  int referenceId() const { return ref_id_; }
+  const SE3& T_w_kf() const { return T_w_kf_; }
+
+  BackendWorker& worker() { return worker_; }
+
+ private:
+  bool wantKeyframe(const Flow& fl, double alpha) const;
+  FrameTrackResult align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha, double& beta);
+
+  CameraModel cam_;
+  const OdometryConfig& cfg_;
+  OdometryResult& res_;
+  BackendWorker worker_;
+  FrameTracker tracker_;
+  Keyframe ref_;
+  int ref_id_ = -1;
+  bool has_ref_ = false, last_ok_ = false;
+  SE3 T_w_kf_;
+  double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;
+  double a_last_ = 0, b_last_ = 0;  // absolute brightness of the last frame
+  SE3 last_T_w_f_, prev_T_w_f_;
+  bool has_last_ = false, has_prev_ = false;
+};
+
+}  // namespace eds
