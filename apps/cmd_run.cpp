@@ -18,10 +18,7 @@ struct RunArgs {
 };
 
 void runRun(RunArgs& a) {
-  if (!a.frames_only)
-    throw std::invalid_argument(
-        "eds run: the event front-end is not joined to the mapping yet (issue #6); use --frames-only, or "
-        "`eds track --depth-from-gt` for event tracking with known depth");
+  a.cfg.use_events = !a.frames_only;
   const Sequence seq(a.sequence);
   const OdometryResult r = runOdometry(seq, a.cfg);
   writeOdometryOutputs(a.out, r, a.cfg);
@@ -34,7 +31,10 @@ void runRun(RunArgs& a) {
         r.failures.size());
   std::printf("%.2f s wall for %.2f s of sequence (real-time factor %.2f)\n", r.wall_s, r.sequence_s,
               r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
-  std::printf("wrote %s/{trajectory_frames.txt, keyframes.txt, map.ply, summary.json}\n", a.out.c_str());
+  if (a.cfg.use_events)
+    std::printf("%zu of %zu event frames tracked (event-rate poses)\n", r.events_tracked, r.event_frames);
+  std::printf("wrote %s/{%strajectory_frames.txt, keyframes.txt, map.ply, summary.json}\n", a.out.c_str(),
+              a.cfg.use_events ? "trajectory_events.txt, " : "");
 }
 
 }  // namespace
@@ -75,8 +75,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--kf-flow-t", a->cfg.policy.flow_t,
                   "New keyframe when the RMS flow of the translation exceeds this fraction of width + height")
       ->capture_default_str();
-  cmd->add_option("--kf-flow-rt", a->cfg.policy.flow_rt,
-                  "New keyframe when the RMS flow of the whole motion exceeds this fraction of width + height")
+  cmd->add_option(
+         "--kf-flow-rt", a->cfg.policy.flow_rt,
+         "New keyframe when the RMS flow of the whole motion exceeds this fraction of width + height")
       ->capture_default_str();
   cmd->add_flag("!--sync-backend", a->cfg.threaded_backend,
                 "Run the back-end after each keyframe in the tracking thread (deterministic results)");

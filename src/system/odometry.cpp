@@ -12,7 +12,10 @@
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
+#include "frontend/event_packets.hpp"
+#include "init/bootstrap.hpp"
 #include "io/ply.hpp"
+#include "system/event_frontend.hpp"
 #include "system/frame_frontend.hpp"
 
 namespace eds {
@@ -53,51 +56,179 @@ std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, doubl
   return out;
 }
 
+namespace {
+
+// Pose at time t from a time-sorted trajectory: interpolated inside, the nearest end outside.
+SE3 poseAt(const Trajectory& traj, TimeNs t) {
+  if (t <= traj.front().t) return traj.front().T_w_c;
+  if (t >= traj.back().t) return traj.back().T_w_c;
+  const auto it =
+      std::lower_bound(traj.begin(), traj.end(), t, [](const StampedPose& s, TimeNs tt) { return s.t < tt; });
+  const StampedPose& b = *it;
+  const StampedPose& a = *(it - 1);
+  return interpolate(a.T_w_c, b.T_w_c, static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t));
+}
+
+// The run: frames through the bootstrap and the frame front-end, event frames (when used) through the
+// event front-end, merged in time order.
+class Runner {
+ public:
+  Runner(const Sequence& seq, const OdometryConfig& cfg, OdometryResult& res)
+      : seq_(seq),
+        cfg_(cfg),
+        res_(res),
+        und_(seq.camera()),
+        odo_(und_.pinhole(), cfg, res),
+        boot_(und_.pinhole(), cfg.bootstrap),
+        events_(und_.pinhole(), cfg.events) {}
+
+  void frame(std::size_t i) {
+    const TimeNs t = seq_.frames()[i].t;
+    cv::Mat img;
+    und_.undistortImage(seq_.loadFrame(i)).convertTo(img, CV_32F, 1.0 / 255.0);
+    ++res_.frames_in;
+    last_t_ = t;
+    if (!res_.initialized) {
+      if (boot_.add(t, img)) initialize(t, img);
+      return;
+    }
+    // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
+    const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
+    const SE3 T_w_f = odo_.track(t, img, prior ? &last_event_.T_w_c : nullptr);
+    res_.frames.push_back({t, T_w_f});
+    if (odo_.lastTrackOk()) events_.correct(t, T_w_f);
+    syncReference();
+  }
+
+  void eventFrame(const EventFrame& ef) {
+    ++res_.event_frames;
+    if (!res_.initialized) {
+      // Kept until the map exists, then tracked (poses from the first frame on).
+      buffered_.push_back({ef.t, ef.t_first, ef.t_last, ef.delta.clone()});
+      return;
+    }
+    odo_.adoptReference(false);
+    syncReference();
+    trackEvents(ef, nullptr);
+  }
+
+  TimeNs lastTime() const { return last_t_; }
+
+ private:
+  void initialize(TimeNs t, const cv::Mat& img) {
+    res_.initialized = true;
+    res_.init_t = t;
+    res_.init_frames = static_cast<int>(boot_.frames().size());
+    res_.init_restarts = boot_.restarts();
+    // Keyframe 0 is the reference with the bootstrap's depths; keyframe 1 the frame that completed it.
+    const Keyframe& ref = boot_.reference();
+    odo_.addKeyframe(ref.t, ref.image, SE3(), 0.0, 0.0, ref.points);
+    const BootstrapFrame& last = boot_.frames().back();
+    Trajectory boot_traj;
+    for (const BootstrapFrame& f : boot_.frames()) boot_traj.push_back({f.t, f.T_ref_c});
+    for (std::size_t k = 0; k + 1 < boot_traj.size(); ++k) res_.frames.push_back(boot_traj[k]);
+    odo_.setLast(boot_traj[boot_traj.size() - 2].T_w_c);
+    odo_.setLastBrightness(last.a, last.b);
+    const SE3 T_w_f = odo_.addKeyframe(t, img, last.T_ref_c, last.a, last.b);
+    odo_.setLast(T_w_f);
+    res_.frames.push_back({t, T_w_f});
+    res_.tracked += boot_traj.size();
+    if (!cfg_.use_events) return;
+    // The event frames that arrived during the bootstrap, against the first reference, each from the
+    // bootstrap's pose at its time.
+    odo_.adoptReference(true);
+    syncReference();
+    for (EventFrame& ef : buffered_) {
+      if (ef.t < boot_traj.front().t) continue;
+      const SE3 prior = poseAt(boot_traj, ef.t);
+      trackEvents(ef, &prior);
+    }
+    buffered_.clear();
+  }
+
+  void syncReference() {
+    if (!cfg_.use_events || odo_.referenceId() == event_ref_id_ || odo_.reference().points.empty()) return;
+    events_.setReference(odo_.reference(), odo_.T_w_kf());
+    event_ref_id_ = odo_.referenceId();
+  }
+
+  void trackEvents(const EventFrame& ef, const SE3* prior) {
+    const auto t0 = Clock::now();
+    std::string why;
+    const std::optional<SE3> T = events_.track(ef, prior, &why);
+    res_.event_track_ms.push_back(msSince(t0));
+    if (!T) {
+      res_.failures.push_back({ef.t, "event frame: " + why});
+      return;
+    }
+    ++res_.events_tracked;
+    last_event_ = {ef.t, *T};
+    has_event_pose_ = true;
+    res_.events.push_back(last_event_);
+  }
+
+  const Sequence& seq_;
+  const OdometryConfig& cfg_;
+  OdometryResult& res_;
+  Undistorter und_;
+  FrameFrontend odo_;
+  Bootstrap boot_;
+  EventFrontend events_;
+  int event_ref_id_ = -1;
+  std::vector<EventFrame> buffered_;
+  StampedPose last_event_;
+  bool has_event_pose_ = false;
+  TimeNs last_t_ = 0;
+
+ public:
+  FrameFrontend& frontend() { return odo_; }
+  const Undistorter& undistorter() const { return und_; }
+};
+
+}  // namespace
+
 OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
   const auto wall0 = Clock::now();
   if (!seq.hasFrames())
-    throw InputError((seq.dir() / "images.txt").string(), "frames-only odometry needs frames");
+    throw InputError((seq.dir() / "images.txt").string(),
+                     "the odometry needs frames (keyframes come from them)");
+  if (cfg.use_events && !seq.hasEvents())
+    throw InputError((seq.dir() / "events.txt").string(),
+                     "no events in the sequence: run with --frames-only, or add events");
   if (cfg.frame_rate < 0 || cfg.start_s < 0 || cfg.duration_s < 0)
     throw std::invalid_argument("run: frame rate, start and duration must not be negative");
-  const Undistorter und(seq.camera());
-  const CameraModel& cam = und.pinhole();
+  cfg.event_frame.validate();
   OdometryResult res;
-  FrameFrontend odo(cam, cfg, res);
-  Bootstrap boot(cam, cfg.bootstrap);
+  Runner run(seq, cfg, res);
   const std::vector<std::size_t> idx =
       selectFrames(seq.frames(), cfg.start_s, cfg.duration_s, cfg.frame_rate);
   if (idx.empty())
     throw InputError((seq.dir() / "images.txt").string(), "no frame in the requested time range");
   res.first_t = seq.frames()[idx.front()].t;
-  TimeNs last_t = res.first_t;
-  for (std::size_t i : idx) {
-    const TimeNs t = seq.frames()[i].t;
-    cv::Mat img;
-    und.undistortImage(seq.loadFrame(i)).convertTo(img, CV_32F, 1.0 / 255.0);
-    ++res.frames_in;
-    last_t = t;
-    if (!res.initialized) {
-      if (!boot.add(t, img)) continue;
-      res.initialized = true;
-      res.init_t = t;
-      res.init_frames = static_cast<int>(boot.frames().size());
-      res.init_restarts = boot.restarts();
-      // Keyframe 0 is the reference with the bootstrap's depths; keyframe 1 the frame that completed it.
-      const Keyframe& ref = boot.reference();
-      odo.addKeyframe(ref.t, ref.image, SE3(), 0.0, 0.0, ref.points);
-      const BootstrapFrame& last = boot.frames().back();
-      for (std::size_t k = 0; k + 1 < boot.frames().size(); ++k)
-        res.frames.push_back({boot.frames()[k].t, boot.frames()[k].T_ref_c});
-      odo.setLast(boot.frames()[boot.frames().size() - 2].T_ref_c);
-      odo.setLastBrightness(last.a, last.b);
-      const SE3 T_w_f = odo.addKeyframe(t, img, last.T_ref_c, last.a, last.b);
-      odo.setLast(T_w_f);
-      res.frames.push_back({t, T_w_f});
-      res.tracked += boot.frames().size();
-      continue;
+  const TimeNs t_end =
+      cfg.duration_s > 0 ? res.first_t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
+  std::size_t next = 0;  // next frame (index into idx)
+  if (cfg.use_events) {
+    auto src = seq.openEvents();
+    EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
+                              cfg.event_frame.stride());
+    EventFrameBuilder builder(run.undistorter(), cfg.event_frame);
+    const EventArray* events = nullptr;
+    std::size_t begin = 0;
+    EventFrame ef;
+    while (packets.next(events, begin)) {
+      builder.build(*events, begin, ef);
+      if (ef.t < res.first_t) continue;
+      if (ef.t > t_end) break;
+      while (next < idx.size() && seq.frames()[idx[next]].t <= ef.t) run.frame(idx[next++]);
+      run.eventFrame(ef);
     }
-    res.frames.push_back({t, odo.track(t, img)});
   }
+  while (next < idx.size()) run.frame(idx[next++]);
+  TimeNs last_t = run.lastTime();
+  if (!res.events.empty()) last_t = std::max(last_t, res.events.back().t);
+
+  FrameFrontend& odo = run.frontend();
   odo.worker().waitIdle();
   SlidingWindow& window = odo.worker().window();
   window.flush();
@@ -132,6 +263,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                           const OdometryConfig& cfg) {
   std::filesystem::create_directories(dir);
   writeTum(dir / "trajectory_frames.txt", r.frames);
+  if (cfg.use_events) writeTum(dir / "trajectory_events.txt", r.events);
   writeTum(dir / "keyframes.txt", r.keyframes);
   PointCloud pc;
   for (const MapPoint& p : r.map) {
@@ -140,16 +272,19 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   }
   writePly(dir / "map.ply", pc);
   nlohmann::json j;
-  j["mode"] = "run --frames-only";
+  j["mode"] = cfg.use_events ? "run (events + frames)" : "run --frames-only";
   j["initialized"] = r.initialized;
   j["initialization"] = {{"t", r.initialized ? toSeconds(r.init_t) : 0.0},
                          {"seconds_after_first_frame", r.initialized ? toSeconds(r.init_t - r.first_t) : 0.0},
                          {"frames_used", r.init_frames},
                          {"restarts", r.init_restarts}};
-  j["counts"] = {
-      {"frames", r.frames_in},         {"poses", r.frames.size()},        {"tracked", r.tracked},
-      {"failures", r.failures.size()}, {"keyframes", r.keyframes.size()}, {"map_points", r.map.size()}};
+  j["counts"] = {{"frames", r.frames_in},          {"poses", r.frames.size()},
+                 {"tracked", r.tracked},           {"failures", r.failures.size()},
+                 {"event_frames", r.event_frames}, {"event_frames_tracked", r.events_tracked},
+                 {"event_poses", r.events.size()}, {"keyframes", r.keyframes.size()},
+                 {"map_points", r.map.size()}};
   j["timings_ms"] = {{"frame_tracking", stats(r.track_ms)},
+                     {"event_tracking", stats(r.event_track_ms)},
                      {"mapping", stats(r.mapping_ms)},
                      {"backend_per_keyframe", stats(r.ba_ms)}};
   std::vector<double> wp(r.window_points.begin(), r.window_points.end());

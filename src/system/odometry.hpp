@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "backend/sliding_window.hpp"
+#include "frontend/event_frame.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "init/bootstrap.hpp"
@@ -16,6 +17,7 @@
 #include "mapping/depth_fill.hpp"
 #include "mapping/epipolar_search.hpp"
 #include "system/backend_worker.hpp"
+#include "system/event_frontend.hpp"
 
 namespace eds {
 
@@ -37,6 +39,10 @@ struct OdometryConfig {
   // The back-end in its own thread (tracking never waits for it, except when a keyframe is due while
   // the previous one is still being mapped). Off: after each keyframe, deterministic results.
   bool threaded_backend = true;
+  // Events track the camera between frames (EDS); off: frames only.
+  bool use_events = true;
+  EventFrameConfig event_frame;
+  EventFrontendConfig events;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate
   double start_s = 0;     // skip this much from the first frame
   double duration_s = 0;  // 0: to the end
@@ -48,7 +54,10 @@ struct OdometryFailure {
 };
 
 struct OdometryResult {
-  Trajectory frames;     // one pose per frame from the bootstrap's reference on (T_w_c)
+  Trajectory frames;  // one pose per frame from the bootstrap's reference on (T_w_c)
+  Trajectory events;  // one pose per tracked event frame (T_w_ef), events mode
+  std::size_t event_frames = 0, events_tracked = 0;
+  std::vector<double> event_track_ms;
   Trajectory keyframes;  // final (optimized) keyframe poses
   std::vector<MapPoint> map;
   std::size_t frames_in = 0, tracked = 0;

@@ -1,0 +1,91 @@
+#include "system/event_frontend.hpp"
+
+#include <algorithm>
+
+#include "frontend/frame_tracker.hpp"  // sampleBilinear
+
+namespace eds {
+
+EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg)
+    : cam_(pinhole), cfg_(cfg), tracker_(pinhole, cfg.tracker) {
+  cfg_.points.validate();
+}
+
+void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
+  Keyframe kf;
+  kf.id = ref.id;
+  kf.t = ref.t;
+  kf.T_w_kf = T_w_kf;
+  setKeyframeImage(kf, ref.image);
+  // The back-end's points first (their depth is optimized), then the other selected pixels with the
+  // depth of the nearest of them.
+  std::vector<ProjectedPoint> proj;
+  for (const KeyframePoint& p : ref.points)
+    if (p.inv_depth > 0) proj.push_back({p.u, p.v, p.inv_depth});
+  const std::vector<cv::Point> px = selectPoints(kf.grad_x, kf.grad_y, cfg_.points);
+  const std::vector<double> rho = fillInverseDepth(px, proj, cfg_.fill);
+  std::vector<cv::Point2f> uv;
+  std::vector<double> depth;
+  for (std::size_t i = 0; i < px.size(); ++i)
+    if (rho[i] > 0)
+      uv.emplace_back(static_cast<float>(px[i].x), static_cast<float>(px[i].y)), depth.push_back(rho[i]);
+  if (cfg_.depth_median_px > 0) medianFilterInverseDepth(uv, depth, cfg_.depth_median_px);
+  for (std::size_t i = 0; i < uv.size(); ++i) {
+    KeyframePoint kp;
+    kp.u = uv[i].x, kp.v = uv[i].y;
+    kp.gx = kf.grad_x.at<float>(static_cast<int>(kp.v), static_cast<int>(kp.u));
+    kp.gy = kf.grad_y.at<float>(static_cast<int>(kp.v), static_cast<int>(kp.u));
+    kp.inv_depth = depth[i];
+    kf.points.push_back(kp);
+  }
+  if (kf.points.size() < 50) return;  // keep the previous reference: this one cannot be tracked against
+  // The current estimate and the velocity, moved to the new keyframe.
+  if (has_ref_) {
+    const SE3 T_w_ef = T_w_kf_ * T_ef_kf_.inverse();
+    const Mat3 R = (T_w_kf.inverse() * T_w_kf_).rotationMatrix();  // old keyframe -> new
+    T_ef_kf_ = T_w_ef.inverse() * T_w_kf;
+    nu_.head<3>() = R * nu_.head<3>();
+    nu_.tail<3>() = R * nu_.tail<3>();
+  } else {
+    T_ef_kf_ = SE3();
+  }
+  T_w_kf_ = T_w_kf;
+  tracker_.setKeyframe(kf);
+  t_prev_ = -1;
+  has_ref_ = true;
+}
+
+std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, std::string* failure) {
+  if (!has_ref_) return std::nullopt;
+  SE3 T_init = T_ef_kf_;
+  if (prior) {
+    T_init = prior->inverse() * T_w_kf_;
+  } else if (t_prev_ >= 0 && t_last_ > t_prev_) {
+    const double s = static_cast<double>(ef.t - t_last_) / static_cast<double>(t_last_ - t_prev_);
+    const SE3 T_step = T_ef_kf_ * T_prev_.inverse();
+    T_init = SE3::exp(std::clamp(s, 0.0, 3.0) * T_step.log()) * T_ef_kf_;
+  }
+  SE3 T = T_init;
+  Vec6 nu = nu_;
+  // Coarse-to-fine only when the prediction is weak (first frames on a reference, after a correction).
+  const TrackResult tr = tracker_.track(ef, T, nu, t_prev_ >= 0 ? 1 : 0);
+  if (!tr.ok) {
+    if (failure) *failure = tr.failure;
+    return std::nullopt;
+  }
+  T_prev_ = T_ef_kf_;
+  t_prev_ = t_last_;
+  T_ef_kf_ = T;
+  nu_ = nu;
+  t_last_ = ef.t;
+  return T_w_kf_ * T_ef_kf_.inverse();
+}
+
+void EventFrontend::correct(TimeNs t, const SE3& T_w_c) {
+  if (!has_ref_) return;
+  T_ef_kf_ = T_w_c.inverse() * T_w_kf_;
+  t_last_ = t;
+  t_prev_ = -1;
+}
+
+}  // namespace eds
