@@ -46,6 +46,7 @@ bool Bootstrap::setReference(TimeNs t, const cv::Mat& image) {
   parallax_ = 0;
   frames_.push_back({t, SE3(), 0.0, 0.0});
   images_.push_back(image);
+  photometric_failed_ = false;
   geo_state_ = cfg_.geometric ? GeoState::kPending : GeoState::kUnavailable;
   if (cfg_.geometric) geo_.reset(image);
   return true;
@@ -82,6 +83,7 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
     if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
     if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
   }
+  if (photometric_failed_) return keepForGeometry(t, image);
   // Constant-velocity prediction in the reference frame.
   SE3 T_c_ref = frames_.back().T_ref_c.inverse();
   if (frames_.size() >= 2) {
@@ -99,9 +101,8 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
     T_c_ref = frames_.back().T_ref_c.inverse();
     alpha = std::exp(frames_.back().a), beta = frames_.back().b;
     if (!tracker.track(image, T_c_ref, alpha, beta).ok || !(alpha > 0)) {
-      ++restarts_;
-      setReference(t, image);
-      return false;
+      photometric_failed_ = true;
+      return keepForGeometry(t, image);
     }
   }
 
@@ -163,15 +164,32 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
                  n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
                  fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
   if (diverged || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
-    ++restarts_;
-    setReference(t, image);
-    return false;
+    // The geometric path may still make it from this reference (large motion between sparse frames).
+    frames_.pop_back();
+    images_.pop_back();
+    photometric_failed_ = true;
+    return keepForGeometry(t, image);
   }
   if (n_after < cfg_.min_frames || parallax_ < cfg_.min_parallax_px || geo_state_ == GeoState::kPending)
     return false;
   normalizeScale();
   done_ = true;
   return true;
+}
+
+bool Bootstrap::keepForGeometry(TimeNs t, const cv::Mat& image) {
+  const bool geometry_alive =
+      geo_state_ == GeoState::kPending && geo_.tracks() >= cfg_.geometric_init.min_tracks;
+  if (!geometry_alive || static_cast<int>(frames_.size()) > cfg_.max_frames) {
+    ++restarts_;
+    setReference(t, image);
+    return false;
+  }
+  // The photometric path gave up on this reference: the frame keeps the last pose as a placeholder
+  // (the geometric path re-aligns every frame once it succeeds).
+  frames_.push_back({t, frames_.back().T_ref_c, frames_.back().a, frames_.back().b});
+  images_.push_back(image);
+  return false;
 }
 
 void Bootstrap::normalizeScale() {

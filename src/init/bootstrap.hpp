@@ -81,12 +81,14 @@ class Bootstrap {
   Keyframe ref_;
   bool initFromGeometry(TimeNs t, const cv::Mat& image, const GeometricInitResult& g);
   void normalizeScale();
+  // After the photometric path failed: keeps the frame for the geometric path, or restarts.
+  bool keepForGeometry(TimeNs t, const cv::Mat& image);
 
   enum class GeoState { kPending, kPlanar, kUnavailable };
   GeometricInit geo_;
   GeoState geo_state_ = GeoState::kPending;
   std::vector<cv::Mat> images_;  // frames since the reference (for re-alignment after the geometric path)
-  bool has_ref_ = false, done_ = false, geometric_used_ = false;
+  bool has_ref_ = false, done_ = false, geometric_used_ = false, photometric_failed_ = false;
   std::vector<BootstrapFrame> frames_;
   cv::Mat last_image_;
   int restarts_ = 0;

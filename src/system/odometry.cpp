@@ -134,15 +134,16 @@ class Runner {
     res_.frames.push_back({t, T_w_f});
     res_.tracked += boot_traj.size();
     if (!cfg_.use_events) return;
-    // The event frames that arrived during the bootstrap, against the first reference, each from the
-    // bootstrap's pose at its time.
-    odo_.adoptReference(true);
-    syncReference();
+    // The event frames that arrived during the bootstrap, against the bootstrap's reference keyframe
+    // (the first keyframe), each from the bootstrap's pose at its time.
+    events_.setReference(ref, SE3());
     for (EventFrame& ef : buffered_) {
       if (ef.t < boot_traj.front().t) continue;
       const SE3 prior = poseAt(boot_traj, ef.t);
       trackEvents(ef, &prior);
     }
+    odo_.adoptReference(true);
+    syncReference();
     buffered_.clear();
   }
 
