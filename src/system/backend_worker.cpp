@@ -6,14 +6,9 @@
 #include <cstdio>
 #include <cstdlib>
 
-namespace eds {
+#include "system/run_stats.hpp"
 
-namespace {
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-}  // namespace
+namespace eds {
 
 BackendWorker::BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping,
                              const BackendConfig& backend, bool threaded)

@@ -4,14 +4,9 @@
 #include <cmath>
 #include <string>
 
-namespace eds {
+#include "system/run_stats.hpp"
 
-namespace {
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-}  // namespace
+namespace eds {
 
 Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const CameraModel& cam) {
   Flow f;

@@ -17,15 +17,11 @@
 #include "io/ply.hpp"
 #include "system/event_frontend.hpp"
 #include "system/frame_frontend.hpp"
+#include "system/run_stats.hpp"
 
 namespace eds {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 double peakRssMb() {
   rusage ru{};
@@ -57,17 +53,6 @@ std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, doubl
 }
 
 namespace {
-
-// Pose at time t from a time-sorted trajectory: interpolated inside, the nearest end outside.
-SE3 poseAt(const Trajectory& traj, TimeNs t) {
-  if (t <= traj.front().t) return traj.front().T_w_c;
-  if (t >= traj.back().t) return traj.back().T_w_c;
-  const auto it =
-      std::lower_bound(traj.begin(), traj.end(), t, [](const StampedPose& s, TimeNs tt) { return s.t < tt; });
-  const StampedPose& b = *it;
-  const StampedPose& a = *(it - 1);
-  return interpolate(a.T_w_c, b.T_w_c, static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t));
-}
 
 // The run: frames through the bootstrap and the frame front-end, event frames (when used) through the
 // event front-end, merged in time order.
@@ -247,19 +232,6 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
   return res;
 }
 
-namespace {
-nlohmann::json stats(std::vector<double> v) {
-  if (v.empty()) return nullptr;
-  std::sort(v.begin(), v.end());
-  const auto pct = [&](double q) {
-    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5))];
-  };
-  double sum = 0;
-  for (double x : v) sum += x;
-  return {{"median", pct(0.5)}, {"p95", pct(0.95)}, {"mean", sum / v.size()}, {"max", v.back()}};
-}
-}  // namespace
-
 void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
                           const OdometryConfig& cfg) {
   std::filesystem::create_directories(dir);
@@ -284,12 +256,12 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"event_frames", r.event_frames}, {"event_frames_tracked", r.events_tracked},
                  {"event_poses", r.events.size()}, {"keyframes", r.keyframes.size()},
                  {"map_points", r.map.size()}};
-  j["timings_ms"] = {{"frame_tracking", stats(r.track_ms)},
-                     {"event_tracking", stats(r.event_track_ms)},
-                     {"mapping", stats(r.mapping_ms)},
-                     {"backend_per_keyframe", stats(r.ba_ms)}};
+  j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},
+                     {"event_tracking", timingStats(r.event_track_ms)},
+                     {"mapping", timingStats(r.mapping_ms)},
+                     {"backend_per_keyframe", timingStats(r.ba_ms)}};
   std::vector<double> wp(r.window_points.begin(), r.window_points.end());
-  j["window_points"] = stats(wp);
+  j["window_points"] = timingStats(wp);
   j["wall_s"] = r.wall_s;
   j["sequence_s"] = r.sequence_s;
   j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;

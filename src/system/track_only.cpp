@@ -12,27 +12,11 @@
 #include "core/undistorter.hpp"
 #include "frontend/event_packets.hpp"
 #include "mapping/depth_fill.hpp"
+#include "system/run_stats.hpp"
 
 namespace eds {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-// Pose at time t from a trajectory sorted by time: interpolated inside, the nearest end outside.
-SE3 poseAt(const Trajectory& traj, TimeNs t) {
-  if (traj.empty()) throw std::logic_error("poseAt on an empty trajectory");
-  if (t <= traj.front().t) return traj.front().T_w_c;
-  if (t >= traj.back().t) return traj.back().T_w_c;
-  const auto it =
-      std::lower_bound(traj.begin(), traj.end(), t, [](const StampedPose& s, TimeNs tt) { return s.t < tt; });
-  const StampedPose& b = *it;
-  const StampedPose& a = *(it - 1);
-  return interpolate(a.T_w_c, b.T_w_c, static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t));
-}
 
 cv::Mat toGray8(const cv::Mat& f) {
   double m = 0;
@@ -255,19 +239,6 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   return res;
 }
 
-namespace {
-nlohmann::json stats(std::vector<double> v) {
-  if (v.empty()) return nullptr;
-  std::sort(v.begin(), v.end());
-  const auto pct = [&](double q) {
-    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * (v.size() - 1) + 0.5))];
-  };
-  double sum = 0;
-  for (double x : v) sum += x;
-  return {{"median", pct(0.5)}, {"p95", pct(0.95)}, {"mean", sum / v.size()}, {"max", v.back()}};
-}
-}  // namespace
-
 void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,
                        const TrackOnlyConfig& cfg) {
   nlohmann::json j;
@@ -278,9 +249,9 @@ void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult&
                  {"keyframes", r.keyframes},
                  {"poses", r.trajectory.size()}};
   j["points_per_keyframe"] = r.points_per_keyframe;
-  j["timings_ms"] = {{"event_frame_build", stats(r.build_ms)},
-                     {"track", stats(r.track_ms)},
-                     {"keyframe_frame_alignment", stats(r.frame_track_ms)}};
+  j["timings_ms"] = {{"event_frame_build", timingStats(r.build_ms)},
+                     {"track", timingStats(r.track_ms)},
+                     {"keyframe_frame_alignment", timingStats(r.frame_track_ms)}};
   j["wall_s"] = r.wall_s;
   j["sequence_s"] = r.sequence_s;
   j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;

@@ -8,28 +8,13 @@
 #include "map/keyframe.hpp"
 #include "sim/presets.hpp"
 #include "sim/simulator.hpp"
+#include "sim_frames.hpp"
 
 namespace eds {
 namespace {
 
-CameraModel camera() {
-  CameraModel c;
-  c.width = 240, c.height = 180;
-  c.fx = c.fy = 200;
-  c.cx = 119.5, c.cy = 89.5;
-  return c;
-}
-
-struct Frames : sim::SimSink {
-  void onEvents(const EventArray&) override {}
-  void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) override {
-    times.push_back(t);
-    images.push_back(intensity.clone());
-    depths.push_back(depth.clone());
-  }
-  std::vector<TimeNs> times;
-  std::vector<cv::Mat> images, depths;
-};
+CameraModel camera() { return test::simCamera(); }
+using Frames = test::FrameSink;
 
 // Frames of a textured plane along the hand-held motion, every 0.4 s (baselines of several cm, so
 // that depth is observable).

@@ -7,28 +7,13 @@
 #include "init/bootstrap.hpp"
 #include "sim/presets.hpp"
 #include "sim/simulator.hpp"
+#include "sim_frames.hpp"
 
 namespace eds {
 namespace {
 
-CameraModel camera() {
-  CameraModel c;
-  c.width = 240, c.height = 180;
-  c.fx = c.fy = 200;
-  c.cx = 119.5, c.cy = 89.5;
-  return c;
-}
-
-struct Frames : sim::SimSink {
-  void onEvents(const EventArray&) override {}
-  void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) override {
-    times.push_back(t);
-    images.push_back(intensity.clone());
-    depths.push_back(depth.clone());
-  }
-  std::vector<TimeNs> times;
-  std::vector<cv::Mat> images, depths;
-};
+CameraModel camera() { return test::simCamera(); }
+using Frames = test::FrameSink;
 
 TEST(Bootstrap, InitializesPoseAndDepthsUpToScale) {
   const sim::Motion motion{sim::handheldMotion(2.5, 4)};
