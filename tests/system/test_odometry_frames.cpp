@@ -18,6 +18,12 @@
 namespace eds {
 namespace {
 
+OdometryConfig framesOnly() {
+  OdometryConfig cfg;
+  cfg.use_events = false;
+  return cfg;
+}
+
 eval::AteResult evaluate(const OdometryResult& r, const Trajectory& gt, double until_s = 0) {
   eval::EvalConfig ec;
   ec.alignment = eval::Alignment::kSim3;
@@ -28,7 +34,7 @@ eval::AteResult evaluate(const OdometryResult& r, const Trajectory& gt, double u
 TEST(FramesOnly, EsimPlaneFirstSeconds) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
   const Sequence seq(dir);
-  OdometryConfig cfg;
+  OdometryConfig cfg = framesOnly();
   cfg.duration_s = 3.0;
   cfg.threaded_backend = false;  // deterministic
   const OdometryResult r = runOdometry(seq, cfg);
@@ -46,7 +52,7 @@ TEST(FramesOnly, EsimPlaneFirstSeconds) {
 TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
   EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
   const Sequence seq(dir);
-  const OdometryResult r = runOdometry(seq, {});
+  const OdometryResult r = runOdometry(seq, framesOnly());
   ASSERT_TRUE(r.initialized);
   const eval::AteResult a = evaluate(r, seq.groundTruth());
   std::printf(
@@ -89,7 +95,7 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   }
   std::filesystem::remove(dir / "events.txt");  // a frames-only sequence
   const Sequence seq(dir);
-  OdometryConfig cfg;
+  OdometryConfig cfg = framesOnly();
   cfg.threaded_backend = false;  // deterministic
   const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
@@ -118,7 +124,7 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   EXPECT_LE(a.trans.rmse, 0.003);
   EXPECT_GE(a.coverage, 0.9);
   // What eds run writes: the map as PLY, read back.
-  writeOdometryOutputs(dir / "out", r, {});
+  writeOdometryOutputs(dir / "out", r, cfg);
   EXPECT_EQ(readPly(dir / "out" / "map.ply").xyz.size(), r.map.size());
   std::filesystem::remove_all(dir);
 }
@@ -134,13 +140,13 @@ TEST(FramesOnly, FrameRateSelectionAndBadArguments) {
   EXPECT_TRUE(selectFrames(frames, 10.0, 0, 0).empty());
   EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
   const Sequence seq(dir);
-  OdometryConfig cfg;
+  OdometryConfig cfg = framesOnly();
   cfg.frame_rate = -1;
   EXPECT_THROW(runOdometry(seq, cfg), std::invalid_argument);
-  cfg = {};
+  cfg = framesOnly();
   cfg.start_s = 100;
   EXPECT_THROW(runOdometry(seq, cfg), InputError);
-  cfg = {};
+  cfg = framesOnly();
   cfg.backend.window = 1;
   EXPECT_THROW(runOdometry(seq, cfg), std::invalid_argument);
 }
