@@ -1,6 +1,7 @@
 #include "frontend/frame_tracker.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -89,7 +90,8 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double a
   return static_cast<int>(r.size());
 }
 
-FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha, double& beta) const {
+FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha, double& beta,
+                                     int levels) const {
   if (points_.empty()) throw std::logic_error("FrameTracker::track before setKeyframe");
   std::vector<cv::Mat> img;
   pyramid(frame, img);
@@ -103,7 +105,8 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
     for (double x : rr) c += std::abs(x) <= d ? 0.5 * x * x : d * (std::abs(x) - 0.5 * d);
     return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
   };
-  for (int l = cfg_.levels - 1; l >= 0; --l) {
+  const int start = levels > 0 ? std::min(levels, cfg_.levels) - 1 : cfg_.levels - 1;
+  for (int l = start; l >= 0; --l) {
     double lambda = 1e-3;
     if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
     double c0 = cost(r);

@@ -36,7 +36,10 @@ class FrameTracker {
   void setKeyframe(const Keyframe& kf);
   // Refines T_f_kf (frame from keyframe) and α, β, from their initial values. `frame` is the
   // undistorted image, CV_32F in [0, 1].
-  FrameTrackResult track(const cv::Mat& frame, SE3& T_f_kf, double& alpha, double& beta) const;
+  // levels > 0: start at that many levels from the finest (a good initial pose, e.g. the event
+  // tracker's, needs no coarse levels); 0: all.
+  FrameTrackResult track(const cv::Mat& frame, SE3& T_f_kf, double& alpha, double& beta,
+                         int levels = 0) const;
 
   // For tests: residuals and Jacobian (columns ξ (6), α, β) at pyramid level `level`.
   // The image derivative is that of the bilinear interpolant itself, so the Jacobian is exact.

@@ -67,8 +67,10 @@ std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, 
   }
   SE3 T = T_init;
   Vec6 nu = nu_;
-  // Coarse-to-fine only when the prediction is weak (first frames on a reference, after a correction).
-  const TrackResult tr = tracker_.track(ef, T, nu, t_prev_ >= 0 ? 1 : 0);
+  // Coarse-to-fine only when the prediction is weak (first frames on a reference); a frame's
+  // correction or a constant-velocity prediction is close enough for the finest level alone.
+  const TrackResult tr = tracker_.track(ef, T, nu, t_prev_ >= 0 || corrected_ ? 1 : 0);
+  corrected_ = false;
   if (!tr.ok) {
     if (failure) *failure = tr.failure;
     return std::nullopt;
@@ -86,6 +88,7 @@ void EventFrontend::correct(TimeNs t, const SE3& T_w_c) {
   T_ef_kf_ = T_w_c.inverse() * T_w_kf_;
   t_last_ = t;
   t_prev_ = -1;
+  corrected_ = true;
 }
 
 }  // namespace eds

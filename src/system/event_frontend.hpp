@@ -43,6 +43,7 @@ class EventFrontend {
   SE3 T_ef_kf_, T_prev_;  // current estimate and the one before (constant-velocity prediction)
   Vec6 nu_ = Vec6::Zero();
   TimeNs t_last_ = -1, t_prev_ = -1;
+  bool corrected_ = false;
 };
 
 }  // namespace eds

@@ -119,7 +119,8 @@ FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3&
   T_f_kf = T_w_pred.inverse() * T_w_kf_;
   alpha = alpha_, beta = beta_;
   if (!has_ref_) return {};
-  FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta);
+  // The event tracker's pose is close: the coarse levels would only cost time.
+  FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta, prior ? cfg_.prior_levels : 0);
   if (!tr.ok) {
     // No motion since the last frame, then half the velocity.
     for (const SE3& T_w_try : {last_T_w_f_, interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5)}) {

@@ -33,6 +33,7 @@ struct FlowKeyframePolicyConfig {
 struct OdometryConfig {
   BootstrapConfig bootstrap;
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
+  int prior_levels = 2;  // pyramid levels of the frame alignment when the event pose seeds it
   MappingConfig mapping;
   BackendConfig backend;
   FlowKeyframePolicyConfig policy;
