@@ -79,6 +79,9 @@ void addRunCommand(CLI::App& app) {
          "--kf-flow-rt", a->cfg.policy.flow_rt,
          "New keyframe when the RMS flow of the whole motion exceeds this fraction of width + height")
       ->capture_default_str();
+  cmd->add_option("--prior-levels", a->cfg.prior_levels,
+                  "Pyramid levels of the frame alignment seeded by the event pose (0: all)")
+      ->capture_default_str();
   cmd->add_flag("!--sync-backend", a->cfg.threaded_backend,
                 "Run the back-end after each keyframe in the tracking thread (deterministic results)");
   cmd->add_flag("--marginalization", a->cfg.backend.marginalize,

@@ -16,7 +16,7 @@ namespace eds {
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
   PointSelectionConfig points;  // selection on the keyframe's log gradient (as in tracking-only mode)
-  DepthFillConfig fill{.max_distance_px = 8, .neighbours = 3};
+  DepthFillConfig fill{.max_distance_px = 1, .neighbours = 3};
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
 };
 

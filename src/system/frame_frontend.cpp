@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "system/run_stats.hpp"
 
@@ -113,26 +114,32 @@ bool FrameFrontend::wantKeyframe(const Flow& fl, double alpha) const {
 // prediction, trying DSO's other starting points when that fails.
 FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha,
                                       double& beta) {
-  SE3 T_w_pred = last_T_w_f_;
-  if (has_prev_) T_w_pred = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
-  if (prior) T_w_pred = *prior;
+  SE3 T_w_cv = last_T_w_f_;
+  if (has_prev_) T_w_cv = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+  const SE3 T_w_pred = prior ? *prior : T_w_cv;
   T_f_kf = T_w_pred.inverse() * T_w_kf_;
   alpha = alpha_, beta = beta_;
   if (!has_ref_) return {};
   // The event tracker's pose is close: the coarse levels would only cost time.
   FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta, prior ? cfg_.prior_levels : 0);
+  // Starting points to try as well: the frames' own constant-velocity prediction when the event pose
+  // seeded the alignment (the event tracker can drift between frames: the frame must not follow it),
+  // then, when the alignment failed, no motion since the last frame and half the velocity.
+  std::vector<SE3> others;
+  if (prior && (!tr.ok || tr.rmse > 1.15 * last_rmse_)) others.push_back(T_w_cv);
   if (!tr.ok) {
-    // No motion since the last frame, then half the velocity.
-    for (const SE3& T_w_try : {last_T_w_f_, interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5)}) {
-      SE3 T_try = T_w_try.inverse() * T_w_kf_;
-      double a_try = alpha_, b_try = beta_;
-      const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
-      if (tr2.ok || tr2.rmse < tr.rmse) {
-        T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
-        if (tr.ok) break;
-      }
+    others.push_back(last_T_w_f_);
+    others.push_back(interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5));
+  }
+  for (const SE3& T_w_try : others) {
+    SE3 T_try = T_w_try.inverse() * T_w_kf_;
+    double a_try = alpha_, b_try = beta_;
+    const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
+    if ((tr2.ok && !tr.ok) || (tr2.ok == tr.ok && tr2.rmse < tr.rmse)) {
+      T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
     }
   }
+  if (tr.ok) last_rmse_ = tr.rmse;
   return tr;
 }
 

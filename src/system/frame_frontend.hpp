@@ -57,6 +57,7 @@ class FrameFrontend {
   SE3 T_w_kf_;
   double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;
   double a_last_ = 0, b_last_ = 0;  // absolute brightness of the last frame
+  double last_rmse_ = 1e9;          // of the last successful alignment
   SE3 last_T_w_f_, prev_T_w_f_;
   bool has_last_ = false, has_prev_ = false;
 };
