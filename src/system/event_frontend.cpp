@@ -17,8 +17,9 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
   kf.t = ref.t;
   kf.T_w_kf = T_w_kf;
   setKeyframeImage(kf, ref.image);
-  // The back-end's points first (their depth is optimized), then the other selected pixels with the
-  // depth of the nearest of them.
+  // The back-end's points (their depth is optimized), and the keyframe's selected pixels that lie
+  // next to one of them (fill radius): farther, a depth taken across an occlusion edge would bias
+  // the tracker.
   std::vector<ProjectedPoint> proj;
   for (const KeyframePoint& p : ref.points)
     if (p.inv_depth > 0) proj.push_back({p.u, p.v, p.inv_depth});
@@ -26,6 +27,11 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
   const std::vector<double> rho = fillInverseDepth(px, proj, cfg_.fill);
   std::vector<cv::Point2f> uv;
   std::vector<double> depth;
+  const float border = 2.0f;
+  for (const ProjectedPoint& p : proj)
+    if (p.u >= border && p.v >= border && p.u <= kf.image.cols - 1 - border &&
+        p.v <= kf.image.rows - 1 - border)
+      uv.emplace_back(p.u, p.v), depth.push_back(p.inv_depth);
   for (std::size_t i = 0; i < px.size(); ++i)
     if (rho[i] > 0)
       uv.emplace_back(static_cast<float>(px[i].x), static_cast<float>(px[i].y)), depth.push_back(rho[i]);
@@ -33,8 +39,8 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
   for (std::size_t i = 0; i < uv.size(); ++i) {
     KeyframePoint kp;
     kp.u = uv[i].x, kp.v = uv[i].y;
-    kp.gx = kf.grad_x.at<float>(static_cast<int>(kp.v), static_cast<int>(kp.u));
-    kp.gy = kf.grad_y.at<float>(static_cast<int>(kp.v), static_cast<int>(kp.u));
+    kp.gx = sampleBilinear(kf.grad_x, kp.u, kp.v);
+    kp.gy = sampleBilinear(kf.grad_y, kp.u, kp.v);
     kp.inv_depth = depth[i];
     kf.points.push_back(kp);
   }
@@ -69,7 +75,7 @@ std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, 
   Vec6 nu = nu_;
   // Coarse-to-fine only when the prediction is weak (first frames on a reference); a frame's
   // correction or a constant-velocity prediction is close enough for the finest level alone.
-  const TrackResult tr = tracker_.track(ef, T, nu, t_prev_ >= 0 || corrected_ ? 1 : 0);
+  const TrackResult tr = tracker_.track(ef, T, nu, !prior && (t_prev_ >= 0 || corrected_) ? 1 : 0);
   corrected_ = false;
   if (!tr.ok) {
     if (failure) *failure = tr.failure;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
@@ -125,7 +126,19 @@ class Runner {
     for (EventFrame& ef : buffered_) {
       if (ef.t < boot_traj.front().t) continue;
       const SE3 prior = poseAt(boot_traj, ef.t);
-      trackEvents(ef, &prior);
+      // The frames bracket each of these event frames: a result far from their interpolation (more
+      // than half the motion between the two frames, plus a margin) is a wrong minimum, not motion.
+      const auto it = std::lower_bound(boot_traj.begin(), boot_traj.end(), ef.t,
+                                       [](const StampedPose& p, TimeNs t) { return p.t < t; });
+      const SE3& A = it == boot_traj.begin() ? it->T_w_c : (it - 1)->T_w_c;
+      const SE3& B = it == boot_traj.end() ? (it - 1)->T_w_c : it->T_w_c;
+      const SE3 AB = A.inverse() * B;
+      const double max_t = 0.5 * AB.translation().norm() + cfg_.buffered_gate_translation;
+      const double max_r = 0.5 * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
+      trackEvents(ef, &prior, [&](const SE3& T) {
+        const SE3 d = prior.inverse() * T;
+        return d.translation().norm() <= max_t && d.so3().angle() <= max_r;
+      });
     }
     odo_.adoptReference(true);
     syncReference();
@@ -138,13 +151,18 @@ class Runner {
     event_ref_id_ = odo_.referenceId();
   }
 
-  void trackEvents(const EventFrame& ef, const SE3* prior) {
+  void trackEvents(const EventFrame& ef, const SE3* prior,
+                   const std::function<bool(const SE3&)>& plausible = nullptr) {
     const auto t0 = Clock::now();
     std::string why;
     const std::optional<SE3> T = events_.track(ef, prior, &why);
     res_.event_track_ms.push_back(msSince(t0));
     if (!T) {
       res_.failures.push_back({ef.t, "event frame: " + why});
+      return;
+    }
+    if (plausible && !plausible(*T)) {
+      res_.failures.push_back({ef.t, "event frame during the bootstrap: too far from the frames' poses"});
       return;
     }
     ++res_.events_tracked;

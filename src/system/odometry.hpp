@@ -44,6 +44,10 @@ struct OdometryConfig {
   bool use_events = true;
   EventFrameConfig event_frame;
   EventFrontendConfig events;
+  // Event frames that arrive during the bootstrap are tracked once the map exists, from the frames'
+  // poses; results farther than half the motion between the bracketing frames plus these margins are
+  // rejected (translation in map units: the bootstrap's mean inverse depth is 1).
+  double buffered_gate_translation = 0.002, buffered_gate_rotation_deg = 0.2;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate
   double start_s = 0;     // skip this much from the first frame
   double duration_s = 0;  // 0: to the end
