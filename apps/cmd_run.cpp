@@ -1,27 +1,37 @@
-// `eds run SEQUENCE --frames-only --out DIR`: visual odometry on a sequence.
+// `eds run SEQUENCE --out DIR [--frames-only] [--config FILE] [options]`: visual odometry on a sequence.
+// Parameters: defaults, then the YAML file of --config, then the options given on the command line.
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.hpp"
 #include "system/odometry.hpp"
+#include "system/odometry_config_io.hpp"
 
 namespace eds::app {
 
 namespace {
 
 struct RunArgs {
-  std::string sequence, out = "run_out";
+  std::string sequence, out = "run_out", config;
   bool frames_only = false;
-  OdometryConfig cfg;
+  OdometryConfig cli;                                      // what the options wrote
+  std::vector<std::pair<CLI::Option*, std::string>> keys;  // option -> parameter name
 };
 
 void runRun(RunArgs& a) {
-  a.cfg.use_events = !a.frames_only;
+  OdometryConfig cfg;
+  if (!a.config.empty()) loadOdometryConfig(a.config, cfg);
+  for (const auto& [opt, key] : a.keys)
+    if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
+  if (a.frames_only) cfg.use_events = false;
   const Sequence seq(a.sequence);
-  const OdometryResult r = runOdometry(seq, a.cfg);
-  writeOdometryOutputs(a.out, r, a.cfg);
+  const OdometryResult r = runOdometry(seq, cfg);
+  writeOdometryOutputs(a.out, r, cfg);
+  saveOdometryConfig(std::filesystem::path(a.out) / "config_used.yaml", cfg);
   if (!r.initialized)
     std::printf("never initialized over %zu frames (not enough texture or parallax)\n", r.frames_in);
   else
@@ -31,61 +41,64 @@ void runRun(RunArgs& a) {
         r.failures.size());
   std::printf("%.2f s wall for %.2f s of sequence (real-time factor %.2f)\n", r.wall_s, r.sequence_s,
               r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
-  if (a.cfg.use_events)
+  if (cfg.use_events)
     std::printf("%zu of %zu event frames tracked (event-rate poses)\n", r.events_tracked, r.event_frames);
-  std::printf("wrote %s/{%strajectory_frames.txt, keyframes.txt, map.ply, summary.json}\n", a.out.c_str(),
-              a.cfg.use_events ? "trajectory_events.txt, " : "");
+  std::printf("wrote %s/{%strajectory_frames.txt, keyframes.txt, map.ply, summary.json, config_used.yaml}\n",
+              a.out.c_str(), cfg.use_events ? "trajectory_events.txt, " : "");
 }
 
 }  // namespace
 
 void addRunCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "Run the odometry on a sequence");
+  auto* cmd = app.add_subcommand("run", "Run the odometry on a sequence (events + frames, or frames only)");
   auto a = std::make_shared<RunArgs>();
+  OdometryConfig& c = a->cli;
   cmd->add_option("sequence", a->sequence, "Sequence folder")->required();
-  cmd->add_flag("--frames-only", a->frames_only,
-                "Frames alone: bootstrap, frame tracking, mapping, back-end");
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
-  cmd->add_option("--frame-rate", a->cfg.frame_rate, "Keep the frames nearest this rate, Hz (0: all)")
-      ->capture_default_str();
-  cmd->add_option("--start", a->cfg.start_s, "Seconds to skip from the first frame")->capture_default_str();
-  cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process (0: to the end)")
-      ->capture_default_str();
-  cmd->add_option("--window", a->cfg.backend.window, "Keyframes in the back-end window")
-      ->capture_default_str();
-  cmd->add_option("--points-per-keyframe", a->cfg.backend.points_per_keyframe,
-                  "Points each keyframe hosts in the back-end")
-      ->capture_default_str();
-  cmd->add_option("--init-parallax", a->cfg.bootstrap.min_parallax_px,
-                  "Bootstrap: RMS pixel parallax of translation needed to initialize")
-      ->capture_default_str();
-  cmd->add_option("--init-levels", a->cfg.bootstrap.ba_levels,
-                  "Bootstrap: pyramid levels of the two-frame BA")
-      ->capture_default_str();
-  cmd->add_option("--init-depth-prior", a->cfg.bootstrap.depth_prior_weight,
-                  "Bootstrap: weight of the prior holding inverse depths at 1 while parallax is short")
-      ->capture_default_str();
-  cmd->add_option("--ba-iterations", a->cfg.backend.ba.iterations, "Back-end iterations per keyframe")
-      ->capture_default_str();
-  cmd->add_option("--min-gradient", a->cfg.mapping.points.min_gradient,
-                  "Keyframe points: minimum intensity gradient per pixel (intensity in [0, 1])")
-      ->capture_default_str();
-  cmd->add_flag("!--no-epipolar-search", a->cfg.mapping.epipolar_search,
-                "New keyframe points take the depth of the nearest projected map point only");
-  cmd->add_option("--kf-flow-t", a->cfg.policy.flow_t,
-                  "New keyframe when the RMS flow of the translation exceeds this fraction of width + height")
-      ->capture_default_str();
-  cmd->add_option(
-         "--kf-flow-rt", a->cfg.policy.flow_rt,
-         "New keyframe when the RMS flow of the whole motion exceeds this fraction of width + height")
-      ->capture_default_str();
-  cmd->add_option("--prior-levels", a->cfg.prior_levels,
-                  "Pyramid levels of the frame alignment seeded by the event pose (0: all)")
-      ->capture_default_str();
-  cmd->add_flag("!--sync-backend", a->cfg.threaded_backend,
-                "Run the back-end after each keyframe in the tracking thread (deterministic results)");
-  cmd->add_flag("--marginalization", a->cfg.backend.marginalize,
-                "Keep old keyframes' information as a prior (experimental: no first-estimate Jacobians yet)");
+  cmd->add_option("--config", a->config, "YAML file of parameters (as config_used.yaml writes them)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--frames-only", a->frames_only,
+                "Frames alone (no events): bootstrap, frame tracking, mapping, back-end");
+  // Options that set a parameter: registered with its name, so that they override the --config file.
+  const auto param = [&](const std::string& name, auto& field, const std::string& key,
+                         const std::string& help) {
+    a->keys.emplace_back(cmd->add_option(name, field, help)->capture_default_str(), key);
+  };
+  const auto flag = [&](const std::string& name, bool& field, const std::string& key,
+                        const std::string& help) {
+    a->keys.emplace_back(cmd->add_flag(name, field, help), key);
+  };
+  param("--frame-rate", c.frame_rate, "frame_rate", "Keep the frames nearest this rate, Hz (0: all)");
+  param("--start", c.start_s, "start_s", "Seconds to skip from the first frame");
+  param("--duration", c.duration_s, "duration_s", "Seconds to process (0: to the end)");
+  param("--events", c.event_frame.num_events, "event_frame.num_events", "Events per event frame (N)");
+  param("--overlap", c.event_frame.overlap, "event_frame.overlap",
+        "Overlap of consecutive event frames, [0, 1)");
+  param("--window", c.backend.window, "backend.window", "Keyframes in the back-end window");
+  param("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
+        "Points each keyframe hosts in the back-end");
+  param("--ba-iterations", c.backend.ba.iterations, "backend.ba.iterations",
+        "Back-end iterations per keyframe");
+  param("--init-parallax", c.bootstrap.min_parallax_px, "bootstrap.min_parallax_px",
+        "Bootstrap: RMS pixel parallax of translation needed to initialize");
+  param("--init-levels", c.bootstrap.ba_levels, "bootstrap.ba_levels",
+        "Bootstrap: pyramid levels of the two-frame BA");
+  param("--init-depth-prior", c.bootstrap.depth_prior_weight, "bootstrap.depth_prior_weight",
+        "Bootstrap: weight of the prior holding inverse depths at 1 while parallax is short");
+  param("--min-gradient", c.mapping.points.min_gradient, "mapping.points.min_gradient",
+        "Keyframe points: minimum intensity gradient per pixel (intensity in [0, 1])");
+  param("--kf-flow-t", c.policy.flow_t, "policy.flow_t",
+        "New keyframe when the RMS flow of the translation exceeds this fraction of width + height");
+  param("--kf-flow-rt", c.policy.flow_rt, "policy.flow_rt",
+        "New keyframe when the RMS flow of the whole motion exceeds this fraction of width + height");
+  param("--prior-levels", c.prior_levels, "prior_levels",
+        "Pyramid levels of the frame alignment seeded by the event pose (0: all)");
+  flag("!--no-epipolar-search", c.mapping.epipolar_search, "mapping.epipolar_search",
+       "New keyframe points take the depth of the nearest projected map point only");
+  flag("!--sync-backend", c.threaded_backend, "threaded_backend",
+       "Run the back-end after each keyframe in the tracking thread (deterministic results)");
+  flag("--marginalization", c.backend.marginalize, "backend.marginalize",
+       "Keep old keyframes' information as a prior (experimental: no first-estimate Jacobians yet)");
   cmd->callback([a] { runRun(*a); });
 }
 

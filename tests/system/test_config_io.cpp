@@ -1,0 +1,78 @@
+// Parameters by name: config_used.yaml round-trips, a --config file overrides, bad files name the line.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/error.hpp"
+#include "system/odometry_config_io.hpp"
+#include "test_data.hpp"
+
+namespace eds {
+namespace {
+
+TEST(OdometryConfigIo, RoundTripsEveryParameter) {
+  const auto dir = test::tempDir("config_io");
+  OdometryConfig a;
+  a.backend.window = 5;
+  a.bootstrap.geometric_init.min_parallax_deg = 2.25;
+  a.mapping.epipolar_search = false;
+  a.events.tracker.levels = 2;
+  a.frame_rate = 12.5;
+  saveOdometryConfig(dir / "c.yaml", a);
+  OdometryConfig b;
+  loadOdometryConfig(dir / "c.yaml", b);
+  EXPECT_EQ(b.backend.window, 5);
+  EXPECT_DOUBLE_EQ(b.bootstrap.geometric_init.min_parallax_deg, 2.25);
+  EXPECT_FALSE(b.mapping.epipolar_search);
+  EXPECT_EQ(b.events.tracker.levels, 2);
+  EXPECT_DOUBLE_EQ(b.frame_rate, 12.5);
+  // Writing what was read gives the same file, so nothing is lost or renamed on the way.
+  saveOdometryConfig(dir / "d.yaml", b);
+  std::ifstream f1(dir / "c.yaml"), f2(dir / "d.yaml");
+  const std::string s1((std::istreambuf_iterator<char>(f1)), {}),
+      s2((std::istreambuf_iterator<char>(f2)), {});
+  EXPECT_EQ(s1, s2);
+  EXPECT_GT(s1.size(), 2000u);  // every parameter, not just the changed ones
+  std::filesystem::remove_all(dir);
+}
+
+TEST(OdometryConfigIo, PartialFileOverridesOnlyWhatItNames) {
+  const auto dir = test::tempDir("config_partial");
+  std::ofstream(dir / "c.yaml") << "backend:\n  window: 9\npolicy: {flow_t: 0.03}\n";
+  OdometryConfig c;
+  loadOdometryConfig(dir / "c.yaml", c);
+  EXPECT_EQ(c.backend.window, 9);
+  EXPECT_DOUBLE_EQ(c.policy.flow_t, 0.03);
+  EXPECT_EQ(c.backend.points_per_keyframe, OdometryConfig{}.backend.points_per_keyframe);
+  OdometryConfig d;
+  copyOdometryParameter(c, d, "backend.window");
+  EXPECT_EQ(d.backend.window, 9);
+  EXPECT_THROW(copyOdometryParameter(c, d, "backend.nope"), std::invalid_argument);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(OdometryConfigIo, BadFilesNameFileLineAndKey) {
+  const auto dir = test::tempDir("config_bad");
+  const auto expectError = [&](const std::string& text, const std::string& needle) {
+    std::ofstream(dir / "c.yaml") << text;
+    OdometryConfig c;
+    try {
+      loadOdometryConfig(dir / "c.yaml", c);
+      FAIL() << "no error for: " << text;
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("c.yaml"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+    }
+  };
+  expectError("backend:\n  windw: 3\n", "line 2: unknown parameter 'backend.windw'");
+  expectError("backend:\n  window: many\n", "line 2: bad value for 'backend.window'");
+  expectError("backend: [1, 2\n", "line");
+  expectError("- 1\n- 2\n", "expected a map");
+  OdometryConfig c;
+  EXPECT_THROW(loadOdometryConfig(dir / "missing.yaml", c), InputError);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace eds
