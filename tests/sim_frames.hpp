@@ -1,11 +1,13 @@
 #pragma once
 // For tests that need simulated frames: the 240x180 pinhole camera they use and a sink that keeps the
 // frames and depth maps the simulator renders (events dropped).
+#include <filesystem>
 #include <opencv2/core.hpp>
 #include <vector>
 
 #include "core/camera.hpp"
 #include "sim/simulator.hpp"
+#include "sim/writer.hpp"
 
 namespace eds::test {
 
@@ -27,5 +29,17 @@ struct FrameSink : sim::SimSink {
   std::vector<TimeNs> times;
   std::vector<cv::Mat> images, depths;
 };
+
+// Writes a simulated sequence to `dir` in the ECD layout (plain-text events, no depth maps) with the
+// test camera and 200 Hz ground truth, as `eds simulate` does.
+inline void writeSimSequence(const std::filesystem::path& dir, const sim::Scene& scene,
+                             const sim::Motion& motion, const sim::SimConfig& sc) {
+  const CameraModel cam = simCamera();
+  sim::EcdWriter writer(dir, false, false);
+  sim::writeEcdCalib(dir / "calib.txt", cam);
+  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
+  sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);
+  writer.finish();
+}
 
 }  // namespace eds::test

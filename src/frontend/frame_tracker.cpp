@@ -18,16 +18,17 @@ FrameTracker::FrameTracker(const CameraModel& pinhole, FrameTrackerConfig cfg) :
   if (!(cfg_.huber > 0)) throw std::invalid_argument("frame tracker: huber must be > 0");
 }
 
-CameraModel FrameTracker::levelCamera(int level) const {
-  // Pixel centres at integers: x_l = (x + 0.5) / 2^l - 0.5.
+CameraModel pyramidCamera(const CameraModel& cam, int level) {
   const double s = 1.0 / (1 << level);
-  CameraModel c = cam_;
+  CameraModel c = cam;
   c.fx *= s, c.fy *= s;
-  c.cx = (cam_.cx + 0.5) * s - 0.5;
-  c.cy = (cam_.cy + 0.5) * s - 0.5;
-  c.width = cam_.width >> level, c.height = cam_.height >> level;
+  c.cx = (cam.cx + 0.5) * s - 0.5;
+  c.cy = (cam.cy + 0.5) * s - 0.5;
+  c.width = cam.width >> level, c.height = cam.height >> level;
   return c;
 }
+
+CameraModel FrameTracker::levelCamera(int level) const { return pyramidCamera(cam_, level); }
 
 void FrameTracker::pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img) const {
   img.resize(cfg_.levels);

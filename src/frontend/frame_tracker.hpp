@@ -60,6 +60,10 @@ class FrameTracker {
   std::vector<std::vector<LevelPoint>> points_;  // per level
 };
 
+// The camera of pyramid level `level` (each level half the size of the one below; pixel centres at
+// integers on every level: x_l = (x + 0.5) / 2^l - 0.5).
+CameraModel pyramidCamera(const CameraModel& cam, int level);
+
 // Bilinear sample (pixel centres at integers); the caller keeps (x, y) inside [0, w-1) x [0, h-1).
 inline float sampleBilinear(const cv::Mat& img, double x, double y) {
   const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);

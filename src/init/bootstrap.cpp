@@ -129,10 +129,7 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
   BaStats st;
   for (int l = std::min<int>(cfg_.ba_levels, ref_pyr.size()) - 1; l >= 0; --l) {
     const double s = 1.0 / (1 << l);
-    CameraModel c = cam_;
-    c.fx *= s, c.fy *= s;
-    c.cx = (cam_.cx + 0.5) * s - 0.5, c.cy = (cam_.cy + 0.5) * s - 0.5;
-    c.width = ref_pyr[l].cols, c.height = ref_pyr[l].rows;
+    const CameraModel c = pyramidCamera(cam_, l);
     fr[0].image = ref_pyr[l];
     fr[1].image = cur_pyr[l];
     for (std::size_t i = 0; i < pts.size(); ++i) {

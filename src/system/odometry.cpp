@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -99,6 +97,8 @@ class Runner {
   }
 
   TimeNs lastTime() const { return last_t_; }
+  FrameFrontend& frontend() { return odo_; }
+  const Undistorter& undistorter() const { return und_; }
 
  private:
   void initialize(TimeNs t, const cv::Mat& img) {
@@ -183,10 +183,6 @@ class Runner {
   StampedPose last_event_;
   bool has_event_pose_ = false;
   TimeNs last_t_ = 0;
-
- public:
-  FrameFrontend& frontend() { return odo_; }
-  const Undistorter& undistorter() const { return und_; }
 };
 
 }  // namespace

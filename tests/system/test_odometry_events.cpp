@@ -6,8 +6,7 @@
 #include "core/error.hpp"
 #include "eval/ate.hpp"
 #include "sim/presets.hpp"
-#include "sim/simulator.hpp"
-#include "sim/writer.hpp"
+#include "sim_frames.hpp"
 #include "system/odometry.hpp"
 #include "test_data.hpp"
 
@@ -20,18 +19,12 @@ const std::filesystem::path& roomSequence() {
     const sim::Motion motion{sim::handheldMotion(3.0, 5)};
     sim::Scene scene = sim::makePreset("room", motion, 5);
     scene.loadTextures();
-    CameraModel cam;
-    cam.width = 240, cam.height = 180, cam.fx = cam.fy = 200, cam.cx = 119.5, cam.cy = 89.5;
     sim::SimConfig sc;
     sc.fps = 20;
     sc.events.sigma_C = 0.03;
     sc.events.noise_rate_hz = 0.1;
     sc.events.seed = 5;
-    sim::EcdWriter writer(d, false, false);
-    sim::writeEcdCalib(d / "calib.txt", cam);
-    sim::writeGroundTruth(d / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
-    sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);
-    writer.finish();
+    test::writeSimSequence(d, scene, motion, sc);
     return d;
   }();
   return dir;

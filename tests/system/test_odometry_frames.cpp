@@ -10,8 +10,7 @@
 #include "io/ply.hpp"
 #include "sim/motion.hpp"
 #include "sim/presets.hpp"
-#include "sim/simulator.hpp"
-#include "sim/writer.hpp"
+#include "sim_frames.hpp"
 #include "system/odometry.hpp"
 #include "test_data.hpp"
 
@@ -80,19 +79,11 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
       sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.05), 0.0, 8.0, traj_file.string())};
   sim::Scene scene = sim::makePreset("room", motion, 3);
   scene.loadTextures();
-  CameraModel cam;
-  cam.width = 240, cam.height = 180, cam.fx = cam.fy = 200, cam.cx = 119.5, cam.cy = 89.5;
   sim::SimConfig sc;
   sc.fps = 20;
   sc.render_hz = 20;                        // frames only: no need to render between them
   sc.events.C_pos = sc.events.C_neg = 5.0;  // (almost) no events
-  {
-    sim::EcdWriter writer(dir, false, false);
-    sim::writeEcdCalib(dir / "calib.txt", cam);
-    sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
-    sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);
-    writer.finish();
-  }
+  test::writeSimSequence(dir, scene, motion, sc);
   std::filesystem::remove(dir / "events.txt");  // a frames-only sequence
   const Sequence seq(dir);
   OdometryConfig cfg = framesOnly();
