@@ -12,12 +12,13 @@
 #include "eval/ate.hpp"
 #include "eval/rpe.hpp"
 #include "eval/rpg_folder.hpp"
+#include "io/trajectory_io.hpp"
 
 namespace eds::app {
 namespace {
 
 struct EvalOptions {
-  std::string gt, est, dir, align, time_window, json;
+  std::string gt, est, dir, align, time_window, json, aligned;
   int align_frames = -1;
   bool align_frames_given = false;
   bool rpe = false;
@@ -74,6 +75,16 @@ void runEval(EvalOptions o) {
     j["rpe"] = eval::toJson(rpe);
   }
   if (!o.json.empty()) eval::writeJson(o.json, j);
+  if (!o.aligned.empty()) {
+    // The whole estimate in the ground truth's frame and scale: for plots and error-over-time studies.
+    Trajectory out;
+    out.reserve(in.est.size());
+    for (const StampedPose& p : in.est) {
+      const SE3 T(SO3(r.transform.R) * p.T_w_c.so3(), r.transform.apply(p.T_w_c.translation()));
+      out.push_back({p.t, T});
+    }
+    writeTum(o.aligned, out);
+  }
 }
 
 }  // namespace
@@ -108,6 +119,7 @@ void addEvalCommand(CLI::App& app) {
                   "start_end_time.yaml: keep pairs whose ground-truth stamp lies inside")
       ->check(CLI::ExistingFile);
   cmd->add_option("--json", opts->json, "write the result as JSON");
+  cmd->add_option("--aligned", opts->aligned, "write the estimate in the ground truth's frame (TUM)");
   cmd->add_flag("--rpe", opts->rpe,
                 "also compute relative errors over 10..50 % of the ground-truth path length");
   cmd->callback([opts, frames] {

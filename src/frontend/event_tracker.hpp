@@ -32,7 +32,21 @@ struct EventTrackerConfig {
   int min_points = 30;           // fewer points in view: the frame cannot be tracked
   double min_correlation = 0.2;  // n̂·n below this after the solve: reported as a failure
   double lambda_initial = 1e-3;
+  // The EGM rows from the event camera's view at the start of each track() (egm.hpp egmRowInView);
+  // off: from the keyframe's view, as the paper writes Eq. 5. ν is then in the event camera's frame.
+  bool egm_in_event_view = true;
   void validate() const;
+};
+
+// A Gaussian prior on the pose (a motion model's prediction). Its error is the left twist
+// e = log(T_ef_kf · T_prior⁻¹) = (translation, rotation), with standard deviations `sigma` in metres and
+// radians. One event frame of a scene at roughly one depth barely tells a lateral translation from
+// the rotation that moves the image the same way; the prior pins that direction where the data cannot.
+// The data term's weight is its residuals' variance (from the MAD of the last solve), so the prior
+// keeps its meaning whatever the number of points or the event frame's contrast.
+struct PosePrior {
+  SE3 T_ef_kf;
+  Vec6 sigma = Vec6::Constant(1.0);
 };
 
 struct TrackResult {
@@ -55,7 +69,9 @@ class EventTracker {
   // Refines T_ef_kf and nu (unit 6-vector) from their initial values. If nu is zero, it is
   // initialized by linear least squares given the initial pose.
   // `levels` overrides the configured coarse-to-fine levels (a warm-started frame needs only 1).
-  TrackResult track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, int levels = 0);
+  // `prior`, if given, adds a pose prior to the cost.
+  TrackResult track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, int levels = 0,
+                    const PosePrior* prior = nullptr);
 
   // Points of the keyframe that land inside the event frame at T_ef_kf.
   int pointsInView(const SE3& T_ef_kf, int width, int height) const;
@@ -77,13 +93,16 @@ class EventTracker {
   std::vector<Row6> a_;     // EGM rows
   std::vector<cv::Point2f> px_kf_;
   // One Levenberg-Marquardt solve on one (blurred) event frame; returns the points in view.
-  int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, Eigen::VectorXd& r, Eigen::MatrixXd& J,
-                 double& cost, int& iterations) const;
+  int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior, Eigen::VectorXd& r,
+                 Eigen::MatrixXd& J, double& cost, int& iterations) const;
 
   double huber_;
+  double data_var_;  // variance of one residual (robust, from the last solve): the prior's scale
   mutable cv::Mat blurred_;
   // Scratch (kept between frames: no allocation per frame once warm).
   mutable std::vector<int> idx_;
+  mutable std::vector<int> solve_set_;  // points of the running solve (see evaluate)
+  mutable bool use_set_ = false;
   mutable Eigen::VectorXd m_, mh_;
   mutable Eigen::Matrix<double, Eigen::Dynamic, 6> D_, A_;
 };

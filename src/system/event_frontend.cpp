@@ -1,14 +1,27 @@
 #include "system/event_frontend.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
 
 #include "frontend/frame_tracker.hpp"  // sampleBilinear
 
 namespace eds {
 
+void MotionPriorConfig::validate() const {
+  if (!(sigma_translation > 0) || !(sigma_rotation > 0) || !(accel >= 0) || !(ang_accel >= 0) ||
+      !(max_gap_s > 0))
+    throw std::invalid_argument(
+        "events.motion_prior: sigma_translation and sigma_rotation must be > 0, accel and ang_accel >= 0, "
+        "max_gap_s > 0");
+}
+
 EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg)
     : cam_(pinhole), cfg_(cfg), tracker_(pinhole, cfg.tracker) {
   cfg_.points.validate();
+  cfg_.motion_prior.validate();
 }
 
 void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
@@ -45,6 +58,11 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
     kf.points.push_back(kp);
   }
   if (kf.points.size() < 50) return;  // keep the previous reference: this one cannot be tracked against
+  std::vector<double> z;
+  z.reserve(kf.points.size());
+  for (const KeyframePoint& p : kf.points) z.push_back(1.0 / p.inv_depth);
+  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+  median_depth_ = z[z.size() / 2];
   // The current estimate and the velocity, moved to the new keyframe.
   if (has_ref_) {
     const SE3 T_w_ef = T_w_kf_ * T_ef_kf_.inverse();
@@ -73,10 +91,22 @@ std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, 
   }
   SE3 T = T_init;
   Vec6 nu = nu_;
+  PosePrior motion;
+  const bool use_motion = !prior && motionPrior(ef.t, motion);
   // Coarse-to-fine only when the prediction is weak (first frames on a reference); a frame's
   // correction or a constant-velocity prediction is close enough for the finest level alone.
-  const TrackResult tr = tracker_.track(ef, T, nu, !prior && (t_prev_ >= 0 || corrected_) ? 1 : 0);
+  const TrackResult tr = tracker_.track(ef, T, nu, !prior && (t_prev_ >= 0 || corrected_) ? 1 : 0,
+                                        use_motion ? &motion : nullptr);
   corrected_ = false;
+  if (std::getenv("EDS_DEBUG")) {
+    const Vec6 dev = use_motion ? Vec6((T * motion.T_ef_kf.inverse()).log()) : Vec6::Zero();
+    std::fprintf(stderr,
+                 "[events] t %.3f corr %.3f it %d pts %d prior %d sigma_t %.4f dev_t %.4f dev_r %.4f "
+                 "init_dev_t %.4f\n",
+                 toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, use_motion,
+                 use_motion ? motion.sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
+                 (T * T_init.inverse()).translation().norm());
+  }
   if (!tr.ok) {
     if (failure) *failure = tr.failure;
     return std::nullopt;
@@ -95,6 +125,24 @@ void EventFrontend::correct(TimeNs t, const SE3& T_w_c) {
   t_last_ = t;
   t_prev_ = -1;
   corrected_ = true;
+  t_f0_ = t_f1_, T_w_f0_ = T_w_f1_;
+  t_f1_ = t, T_w_f1_ = T_w_c;
+}
+
+bool EventFrontend::motionPrior(TimeNs t, PosePrior& prior) const {
+  const MotionPriorConfig& mc = cfg_.motion_prior;
+  if (!mc.enabled || t_f0_ < 0 || t_f1_ <= t_f0_) return false;
+  const double gap = toSeconds(t_f1_ - t_f0_), dt = std::abs(toSeconds(t - t_f1_));
+  if (gap > mc.max_gap_s || dt > mc.max_gap_s) return false;
+  // Constant velocity in the body frame: s = 0 at the last frame, -1 at the one before.
+  const double s = toSeconds(t - t_f1_) / gap;
+  const SE3 T_w_pred = T_w_f1_ * SE3::exp(s * (T_w_f0_.inverse() * T_w_f1_).log());
+  prior.T_ef_kf = T_w_pred.inverse() * T_w_kf_;
+  const double grow = 1.0 + std::sqrt(2.0) * dt / gap;
+  const double st = median_depth_ * (mc.sigma_translation * grow + 0.5 * mc.accel * dt * dt);
+  const double sr = mc.sigma_rotation * grow + 0.5 * mc.ang_accel * dt * dt;
+  prior.sigma << st, st, st, sr, sr, sr;
+  return true;
 }
 
 }  // namespace eds

@@ -13,11 +13,29 @@
 
 namespace eds {
 
+// The motion prior of each event frame: a constant-velocity extrapolation of the last two tracked
+// frames' poses. Its standard deviation grows with the time dt since the last frame:
+//     σ(dt) = σ0 (1 + √2 dt / Δ) + ½ a dt²
+// (Δ: time between the two frames; the middle term is the velocity's error from two poses that are
+// each σ0 off). Translations are fractions of the reference's median depth. Far from a frame the
+// prior fades and the events alone decide; between frames at video rate it holds the direction
+// that one event frame cannot tell (lateral translation vs rotation) to what the frames say.
+struct MotionPriorConfig {
+  bool enabled = true;
+  double sigma_translation = 1e-4;  // σ0: fraction of the median depth
+  double accel = 0.3;               // a: fractions of the median depth per s²
+  double sigma_rotation = 5e-4;     // σ0: rad
+  double ang_accel = 10.0;          // a: rad/s²
+  double max_gap_s = 0.5;           // frames farther apart than this predict nothing
+  void validate() const;
+};
+
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
   PointSelectionConfig points;  // selection on the keyframe's log gradient (as in tracking-only mode)
   DepthFillConfig fill{.max_distance_px = 1, .neighbours = 3};
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
+  MotionPriorConfig motion_prior;
 };
 
 class EventFrontend {
@@ -30,7 +48,8 @@ class EventFrontend {
   // Tracks an event frame from the prior (if given) or a constant-velocity prediction. The pose
   // (T_w_ef), or nullopt when the frame cannot be tracked (the estimate then stays as it was).
   std::optional<SE3> track(const EventFrame& ef, const SE3* prior, std::string* failure = nullptr);
-  // A better pose at time t (a tracked frame): the next event frame starts from it.
+  // A better pose at time t (a tracked frame): the next event frame starts from it, and the last two
+  // make the motion prior.
   void correct(TimeNs t, const SE3& T_w_c);
   int numPoints() const { return static_cast<int>(tracker_.numPoints()); }
 
@@ -44,6 +63,11 @@ class EventFrontend {
   Vec6 nu_ = Vec6::Zero();
   TimeNs t_last_ = -1, t_prev_ = -1;
   bool corrected_ = false;
+  double median_depth_ = 1.0;  // of the reference's points
+  // The last two frames' poses (world), for the motion prior.
+  TimeNs t_f0_ = -1, t_f1_ = -1;
+  SE3 T_w_f0_, T_w_f1_;
+  bool motionPrior(TimeNs t, PosePrior& prior) const;
 };
 
 }  // namespace eds

@@ -28,6 +28,9 @@ struct FlowKeyframePolicyConfig {
   double flow_rt = 0.045;      // RMS flow of the whole motion / (w + h)        (DSO: 1 / (0.02·1120))
   double min_in_view = 0.7;    // fraction of the keyframe's points still in view
   double max_log_alpha = 0.7;  // |log α| of the affine brightness between frame and keyframe
+  // Events mode: also a keyframe when the policy would want one at the next frame (constant velocity),
+  // as the events track against it until then.
+  bool lookahead = true;
 };
 
 struct OdometryConfig {

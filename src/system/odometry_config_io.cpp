@@ -70,6 +70,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["backend.ba.lambda_initial"] = &be.ba.lambda_initial;
   f["policy.flow_t"] = &c.policy.flow_t, f["policy.flow_rt"] = &c.policy.flow_rt;
   f["policy.min_in_view"] = &c.policy.min_in_view, f["policy.max_log_alpha"] = &c.policy.max_log_alpha;
+  f["policy.lookahead"] = &c.policy.lookahead;
   f["threaded_backend"] = &c.threaded_backend, f["use_events"] = &c.use_events;
   f["event_frame.num_events"] = &c.event_frame.num_events, f["event_frame.overlap"] = &c.event_frame.overlap;
   f["event_frame.sigma_frac"] = &c.event_frame.sigma_frac, f["event_frame.blur"] = &c.event_frame.blur;
@@ -82,6 +83,13 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   sel("events.points", c.events.points);
   fill("events.fill", c.events.fill);
   f["events.depth_median_px"] = &c.events.depth_median_px;
+  MotionPriorConfig& mp = c.events.motion_prior;
+  f["events.motion_prior.enabled"] = &mp.enabled;
+  f["events.motion_prior.sigma_translation"] = &mp.sigma_translation,
+  f["events.motion_prior.accel"] = &mp.accel;
+  f["events.motion_prior.sigma_rotation"] = &mp.sigma_rotation,
+  f["events.motion_prior.ang_accel"] = &mp.ang_accel;
+  f["events.motion_prior.max_gap_s"] = &mp.max_gap_s;
   f["buffered_gate_translation"] = &c.buffered_gate_translation;
   f["buffered_gate_rotation_deg"] = &c.buffered_gate_rotation_deg;
   f["frame_rate"] = &c.frame_rate, f["start_s"] = &c.start_s, f["duration_s"] = &c.duration_s;
