@@ -75,16 +75,8 @@ void runEval(EvalOptions o) {
     j["rpe"] = eval::toJson(rpe);
   }
   if (!o.json.empty()) eval::writeJson(o.json, j);
-  if (!o.aligned.empty()) {
-    // The whole estimate in the ground truth's frame and scale: for plots and error-over-time studies.
-    Trajectory out;
-    out.reserve(in.est.size());
-    for (const StampedPose& p : in.est) {
-      const SE3 T(SO3(r.transform.R) * p.T_w_c.so3(), r.transform.apply(p.T_w_c.translation()));
-      out.push_back({p.t, T});
-    }
-    writeTum(o.aligned, out);
-  }
+  // The whole estimate in the ground truth's frame and scale.
+  if (!o.aligned.empty()) writeTum(o.aligned, eval::applySim3(in.est, r.transform));
 }
 
 }  // namespace

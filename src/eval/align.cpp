@@ -111,4 +111,12 @@ Sim3 alignTrajectory(const std::vector<Vec3>& p_gt, const std::vector<Quat>& q_g
   return out;
 }
 
+Trajectory applySim3(const Trajectory& traj, const Sim3& T) {
+  Trajectory out;
+  out.reserve(traj.size());
+  for (const StampedPose& p : traj)
+    out.push_back({p.t, SE3(SO3(T.R) * p.T_w_c.so3(), T.apply(p.T_w_c.translation()))});
+  return out;
+}
+
 }  // namespace eds::eval

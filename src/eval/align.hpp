@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/se3.hpp"
+#include "io/trajectory_io.hpp"
 
 namespace eds::eval {
 
@@ -29,6 +30,10 @@ Sim3 umeyama(const std::vector<Vec3>& gt, const std::vector<Vec3>& est, bool kno
 // The yaw theta maximizing trace(Rz(theta) C).
 double bestYaw(const Mat3& C);
 Mat3 rotZ(double theta);
+
+// The trajectory moved into the aligned frame: positions s R p + t, orientations R R_w_c (for plots
+// and error-over-time studies; `eds eval --aligned`).
+Trajectory applySim3(const Trajectory& traj, const Sim3& T);
 
 // Aligns over the first `frames` pairs (-1: all). se3 and posyaw with frames == 1 use the first pose's
 // orientation as well. Throws std::invalid_argument for sim3 with fewer than 2 frames, for frames == 0

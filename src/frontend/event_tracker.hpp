@@ -29,6 +29,7 @@ struct EventTrackerConfig {
   double huber_initial = 0.1;  // on normalized residuals; then 1.345 * 1.4826 * MAD after each solve
   bool adapt_huber = true;
   double border = 2.0;           // px: bicubic sampling needs a margin
+  double set_margin = 4.0;       // px: a solve uses the points this far inside the border at its start
   int min_points = 30;           // fewer points in view: the frame cannot be tracked
   double min_correlation = 0.2;  // n̂·n below this after the solve: reported as a failure
   double lambda_initial = 1e-3;

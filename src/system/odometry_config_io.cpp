@@ -77,6 +77,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   EventTrackerConfig& et = c.events.tracker;
   f["events.tracker.max_iterations"] = &et.max_iterations, f["events.tracker.levels"] = &et.levels;
   f["events.tracker.huber_initial"] = &et.huber_initial, f["events.tracker.adapt_huber"] = &et.adapt_huber;
+  f["events.tracker.set_margin"] = &et.set_margin;
   f["events.tracker.border"] = &et.border, f["events.tracker.min_points"] = &et.min_points;
   f["events.tracker.min_correlation"] = &et.min_correlation,
   f["events.tracker.lambda_initial"] = &et.lambda_initial;

@@ -112,6 +112,27 @@ TEST(EvalAlign, Sim3RecoversKnownTransform) {
   EXPECT_LT(evaluateAte(est, gt, first10).trans.rmse, 1e-8);
 }
 
+TEST(EvalAlign, AppliedTransformLeavesOnlyTheErrors) {
+  // A noisy estimate in another frame and scale: moved by the sim3 the evaluation found, it must give
+  // the same errors with no alignment at all (what `eds eval --aligned` writes).
+  const Trajectory gt = makeTrajectory(300, 0, 10 * kMs, 3);
+  const Mat3 R = Quat(Eigen::AngleAxisd(-1.1, Vec3(0.2, 1, -0.4).normalized())).toRotationMatrix();
+  Trajectory est = applyInverseSim3(gt, 0.4, R, Vec3(0.5, 2.0, -1.0));
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n(0.0, 0.002);
+  for (StampedPose& p : est)
+    p.T_w_c = SE3(p.T_w_c.so3() * SO3::exp(Vec3(n(rng), n(rng), n(rng))),
+                  p.T_w_c.translation() + Vec3(n(rng), n(rng), n(rng)));
+  const AteResult r = evaluateAte(est, gt, EvalConfig{});
+  ASSERT_GT(r.trans.rmse, 1e-3);
+  EvalConfig none;
+  none.alignment = Alignment::kNone;
+  const AteResult raw = evaluateAte(applySim3(est, r.transform), gt, none);
+  EXPECT_NEAR(raw.trans.rmse, r.trans.rmse, 1e-12);
+  EXPECT_NEAR(raw.rot.rmse, r.rot.rmse, 1e-9);
+  EXPECT_NEAR(evaluateAte(applySim3(est, r.transform), gt, EvalConfig{}).transform.s, 1.0, 1e-9);
+}
+
 TEST(EvalAlign, AlignFramesUsesOnlyTheFirstPoses) {
   const Trajectory gt = makeTrajectory(200, 0, 10 * kMs);
   Trajectory est = gt;
