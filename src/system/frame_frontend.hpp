@@ -54,6 +54,7 @@ class FrameFrontend {
   FrameTracker tracker_;
   Keyframe ref_;
   int ref_id_ = -1;
+  double ref_depth_ratio_ = 1.0;  // 90th / 10th percentile of the reference's depths
   bool has_ref_ = false, last_ok_ = false;
   SE3 T_w_kf_;
   double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;

@@ -28,9 +28,11 @@ struct FlowKeyframePolicyConfig {
   double flow_rt = 0.045;      // RMS flow of the whole motion / (w + h)        (DSO: 1 / (0.02·1120))
   double min_in_view = 0.7;    // fraction of the keyframe's points still in view
   double max_log_alpha = 0.7;  // |log α| of the affine brightness between frame and keyframe
-  // Events mode: also a keyframe when the policy would want one at the next frame (constant velocity),
-  // as the events track against it until then.
-  bool lookahead = true;
+  // Events mode: also a keyframe when, at the next frame (constant velocity), the translation flow or
+  // the points in view would be this far past their thresholds (0: off): the events track against
+  // this keyframe until then.
+  double lookahead = 1.5;
+  double lookahead_depth_ratio = 1.5;  // the flow part only where depths span this ratio (90th / 10th)
 };
 
 struct OdometryConfig {

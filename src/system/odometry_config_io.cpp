@@ -70,7 +70,8 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["backend.ba.lambda_initial"] = &be.ba.lambda_initial;
   f["policy.flow_t"] = &c.policy.flow_t, f["policy.flow_rt"] = &c.policy.flow_rt;
   f["policy.min_in_view"] = &c.policy.min_in_view, f["policy.max_log_alpha"] = &c.policy.max_log_alpha;
-  f["policy.lookahead"] = &c.policy.lookahead;
+  f["policy.lookahead"] = &c.policy.lookahead,
+  f["policy.lookahead_depth_ratio"] = &c.policy.lookahead_depth_ratio;
   f["threaded_backend"] = &c.threaded_backend, f["use_events"] = &c.use_events;
   f["event_frame.num_events"] = &c.event_frame.num_events, f["event_frame.overlap"] = &c.event_frame.overlap;
   f["event_frame.sigma_frac"] = &c.event_frame.sigma_frac, f["event_frame.blur"] = &c.event_frame.blur;
