@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 namespace eds::test {
 
@@ -15,12 +17,21 @@ inline std::filesystem::path sharedDataDir() {
   return std::filesystem::path(EDS_SOURCE_DIR) / ".." / "shared" / "data";
 }
 
-// A fresh, empty temporary folder for one test.
+// A fresh, empty temporary folder for one test; removed when the test program exits.
 inline std::filesystem::path tempDir(const std::string& name) {
+  struct Registry {
+    std::vector<std::filesystem::path> dirs;
+    ~Registry() {
+      std::error_code ec;  // best effort: a leftover folder is no reason to fail at exit
+      for (const auto& d : dirs) std::filesystem::remove_all(d, ec);
+    }
+  };
+  static Registry registry;
   const auto dir =
       std::filesystem::temp_directory_path() / ("eds_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  registry.dirs.push_back(dir);
   return dir;
 }
 
