@@ -17,11 +17,13 @@ inline std::filesystem::path sharedDataDir() {
   return std::filesystem::path(EDS_SOURCE_DIR) / ".." / "shared" / "data";
 }
 
-// A fresh, empty temporary folder for one test; removed when the test program exits.
+// A fresh, empty temporary folder for one test; removed when the test program exits (kept when
+// EDS_KEEP_TEST_DIRS is set, to look at what a test wrote).
 inline std::filesystem::path tempDir(const std::string& name) {
   struct Registry {
     std::vector<std::filesystem::path> dirs;
     ~Registry() {
+      if (std::getenv("EDS_KEEP_TEST_DIRS")) return;
       std::error_code ec;  // best effort: a leftover folder is no reason to fail at exit
       for (const auto& d : dirs) std::filesystem::remove_all(d, ec);
     }

@@ -70,7 +70,7 @@ double Bootstrap::translationParallax(const SE3& T_c_ref) const {
   return n ? std::sqrt(ss / n) : 0.0;
 }
 
-bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
+bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
   if (done_) throw std::logic_error("Bootstrap::add after initialization");
   last_image_ = image;
   if (!has_ref_) {
@@ -95,7 +95,17 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image) {
 
   FrameTracker tracker(cam_, cfg_.tracker);
   tracker.setKeyframe(ref_);
-  const FrameTrackResult tr = tracker.track(image, T_c_ref, alpha, beta);
+  FrameTrackResult tr = tracker.track(image, T_c_ref, alpha, beta);
+  if (hint) {
+    SE3 T_h = *hint;
+    double a_h = std::exp(frames_.back().a), b_h = frames_.back().b;
+    const FrameTrackResult tr_h = tracker.track(image, T_h, a_h, b_h);
+    if (tr_h.ok && a_h > 0 && (!tr.ok || !(alpha > 0) || tr_h.rmse < tr.rmse)) {
+      T_c_ref = T_h, alpha = a_h, beta = b_h, tr = tr_h;
+      if (std::getenv("EDS_DEBUG"))
+        std::fprintf(stderr, "bootstrap: the events' pose seeds frame %zu\n", frames_.size());
+    }
+  }
   if (!tr.ok || !(alpha > 0)) {
     // The prediction may have been the problem: retry from the last pose before giving up.
     T_c_ref = frames_.back().T_ref_c.inverse();

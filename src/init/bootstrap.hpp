@@ -59,7 +59,12 @@ class Bootstrap {
 
   // Feeds the next frame (undistorted, CV_32F in [0, 1]). Returns true when the map is initialized;
   // after that the accessors below hold the result and further calls throw.
-  bool add(TimeNs t, const cv::Mat& image);
+  // `hint`, if given, is a guess of the frame's pose in the reference (T_c_ref; from the events, which
+  // track the camera between frames): the alignment starts from it as well as from the
+  // constant-velocity prediction and keeps the better. With frames far apart (the second one 0.4-1 s
+  // after the first) the prediction is far off and the hint is what brings the frame into the basin.
+  bool add(TimeNs t, const cv::Mat& image, const SE3* hint = nullptr);
+  bool hasReference() const { return has_ref_; }
 
   bool done() const { return done_; }
   // The reference keyframe (points with inverse depths, mean 1) and every frame since, the last one

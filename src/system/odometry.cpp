@@ -73,7 +73,14 @@ class Runner {
     ++res_.frames_in;
     last_t_ = t;
     if (!res_.initialized) {
-      if (boot_.add(t, img)) initialize(t, img);
+      // The events' pose at this frame, tracked against the bootstrap's reference, seeds its alignment.
+      SE3 hint;
+      const bool has_hint = has_boot_event_ && std::llabs(t - boot_event_.t) < fromSeconds(0.05);
+      if (has_hint) hint = boot_event_.T_w_c.inverse();
+      if (boot_.add(t, img, has_hint ? &hint : nullptr))
+        initialize(t, img);
+      else
+        syncBootstrapEvents(t);
       return;
     }
     // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
@@ -89,6 +96,12 @@ class Runner {
     if (!res_.initialized) {
       // Kept until the map exists, then tracked (poses from the first frame on).
       buffered_.push_back({ef.t, ef.t_first, ef.t_last, ef.delta.clone()});
+      if (boot_events_ && boot_events_->hasReference()) {
+        if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
+          boot_event_ = {ef.t, *T};
+          has_boot_event_ = true;
+        }
+      }
       return;
     }
     odo_.adoptReference(false);
@@ -145,6 +158,22 @@ class Runner {
     buffered_.clear();
   }
 
+  // During the bootstrap the events track against its reference (its current inverse depths; 1 at
+  // first): their pose at the next frame is the bootstrap's hint. A new reference (a restart) is a new
+  // world: the tracking starts again.
+  void syncBootstrapEvents(TimeNs t) {
+    if (!cfg_.use_events || !cfg_.bootstrap_from_events || !boot_.hasReference()) return;
+    const Keyframe& ref = boot_.reference();
+    if (!boot_events_ || ref.t != boot_ref_t_ || boot_.restarts() != boot_restarts_) {
+      boot_events_.emplace(und_.pinhole(), cfg_.events);
+      boot_ref_t_ = ref.t, boot_restarts_ = boot_.restarts();
+      has_boot_event_ = false;
+    }
+    boot_events_->setReference(ref, SE3());
+    const BootstrapFrame& last = boot_.frames().back();
+    if (last.t == t) boot_events_->correct(t, last.T_ref_c);
+  }
+
   void syncReference() {
     if (!cfg_.use_events || odo_.referenceId() == event_ref_id_ || odo_.reference().points.empty()) return;
     events_.setReference(odo_.reference(), odo_.T_w_kf());
@@ -180,6 +209,11 @@ class Runner {
   EventFrontend events_;
   int event_ref_id_ = -1;
   std::vector<EventFrame> buffered_;
+  std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
+  TimeNs boot_ref_t_ = -1;
+  int boot_restarts_ = -1;
+  StampedPose boot_event_;
+  bool has_boot_event_ = false;
   StampedPose last_event_;
   bool has_event_pose_ = false;
   TimeNs last_t_ = 0;

@@ -53,6 +53,9 @@ struct OdometryConfig {
   // poses; results farther than half the motion between the bracketing frames plus these margins are
   // rejected (translation in map units: the bootstrap's mean inverse depth is 1).
   double buffered_gate_translation = 0.002, buffered_gate_rotation_deg = 0.2;
+  // During the bootstrap, events track against its reference and seed each frame's alignment (frames
+  // far apart: the constant-velocity guess is too far off).
+  bool bootstrap_from_events = true;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate
   double start_s = 0;     // skip this much from the first frame
   double duration_s = 0;  // 0: to the end

@@ -92,6 +92,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["events.motion_prior.sigma_rotation"] = &mp.sigma_rotation,
   f["events.motion_prior.ang_accel"] = &mp.ang_accel;
   f["events.motion_prior.max_gap_s"] = &mp.max_gap_s;
+  f["bootstrap_from_events"] = &c.bootstrap_from_events;
   f["buffered_gate_translation"] = &c.buffered_gate_translation;
   f["buffered_gate_rotation_deg"] = &c.buffered_gate_rotation_deg;
   f["frame_rate"] = &c.frame_rate, f["start_s"] = &c.start_s, f["duration_s"] = &c.duration_s;
