@@ -40,7 +40,7 @@ row() {  # name sequence mode rate
 
 echo "| sequence | mode | frames | ATE (cm) | rot RMSE (deg) | coverage | real-time factor |"
 echo "|---|---|---|---|---|---|---|"
-for rate in 0 12.5 5 2.5; do
+for rate in 0 12.5 5 2.5 1; do
   for mode in events frames; do row ESIM "$DATA/esim_poster6dof_planar" $mode $rate; done
 done
 for preset in room desk; do
