@@ -1,6 +1,7 @@
 // eds run with events and frames (EDS) on a built-in simulated room: 3 s of the hand-held motion with
 // contrast-threshold and background noise; event-rate poses at the full frame rate and with the frames
-// thinned to 5 Hz (events keep tracking in between); and the shared ESIM sequence with frames at 2.5 and 1 Hz.
+// thinned to 5 Hz (events keep tracking in between); and the shared ESIM sequence with frames at 2.5 and 1
+// Hz.
 #include <gtest/gtest.h>
 
 #include "core/error.hpp"
