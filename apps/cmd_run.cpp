@@ -1,5 +1,8 @@
 // `eds run SEQUENCE --out DIR [--frames-only] [--config FILE] [options]`: visual odometry on a sequence.
 // Parameters: defaults, then the YAML file of --config, then the options given on the command line.
+#include <unistd.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -29,7 +32,20 @@ void runRun(RunArgs& a) {
     if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
   if (a.frames_only) cfg.use_events = false;
   const Sequence seq(a.sequence);
-  const OdometryResult r = runOdometry(seq, cfg);
+  // A progress bar on a terminal (stderr), nothing when it is a file or a pipe.
+  ProgressFn bar;
+  if (isatty(fileno(stderr))) {
+    bar = [](double done_s, double total_s) {
+      constexpr int kWidth = 30;
+      const double f = total_s > 0 ? std::clamp(done_s / total_s, 0.0, 1.0) : 1.0;
+      const int n = static_cast<int>(f * kWidth + 0.5);
+      std::fprintf(stderr, "\r[%s%s] %3.0f %%  %.1f / %.1f s", std::string(n, '#').c_str(),
+                   std::string(kWidth - n, '.').c_str(), 100 * f, done_s, total_s);
+      if (f >= 1.0) std::fprintf(stderr, "\n");
+      std::fflush(stderr);
+    };
+  }
+  const OdometryResult r = runOdometry(seq, cfg, bar);
   writeOdometryOutputs(a.out, r, cfg);
   saveOdometryConfig(std::filesystem::path(a.out) / "config_used.yaml", cfg);
   if (!r.initialized)

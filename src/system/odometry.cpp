@@ -221,7 +221,7 @@ class Runner {
 
 }  // namespace
 
-OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
+OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress) {
   const auto wall0 = Clock::now();
   if (!seq.hasFrames())
     throw InputError((seq.dir() / "images.txt").string(),
@@ -242,6 +242,14 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
   const TimeNs t_end =
       cfg.duration_s > 0 ? res.first_t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
   std::size_t next = 0;  // next frame (index into idx)
+  const TimeNs t_last_frame = std::min(seq.frames()[idx.back()].t, t_end);
+  const double total_s = toSeconds(t_last_frame - res.first_t);
+  TimeNs t_reported = res.first_t;
+  auto report = [&](TimeNs t) {
+    if (!progress || t - t_reported < fromSeconds(0.1)) return;
+    t_reported = t;
+    progress(std::min(toSeconds(t - res.first_t), total_s), total_s);
+  };
   if (cfg.use_events) {
     auto src = seq.openEvents();
     EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
@@ -256,9 +264,14 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg) {
       if (ef.t > t_end) break;
       while (next < idx.size() && seq.frames()[idx[next]].t <= ef.t) run.frame(idx[next++]);
       run.eventFrame(ef);
+      report(ef.t);
     }
   }
-  while (next < idx.size()) run.frame(idx[next++]);
+  while (next < idx.size()) {
+    run.frame(idx[next]);
+    report(seq.frames()[idx[next++]].t);
+  }
+  if (progress) progress(total_s, total_s);
   TimeNs last_t = run.lastTime();
   if (!res.events.empty()) last_t = std::max(last_t, res.events.back().t);
 

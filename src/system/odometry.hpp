@@ -5,6 +5,7 @@
 // sliding-window photometric bundle adjustment (system/backend_worker.hpp: in its own thread by default).
 // The event front-end joins in issue #6.
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -85,7 +86,10 @@ struct OdometryResult {
   double peak_rss_mb = 0;
 };
 
-OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg);
+// `progress`, if given, is called now and then (at most every 0.1 s of sequence time) with the
+// sequence time done and the total, in seconds (the total is the frames' span).
+using ProgressFn = std::function<void(double done_s, double total_s)>;
+OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress = {});
 
 // Frame indices to process: [start, start + duration) from the first frame, thinned to the frames
 // nearest a lower rate when frame_rate > 0.

@@ -142,5 +142,21 @@ TEST(FramesOnly, FrameRateSelectionAndBadArguments) {
   EXPECT_THROW(runOdometry(seq, cfg), std::invalid_argument);
 }
 
+TEST(FramesOnly, ProgressGoesForwardToTheEnd) {
+  EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
+  const Sequence seq(dir);
+  OdometryConfig cfg = framesOnly();
+  cfg.duration_s = 1.0;
+  std::vector<std::pair<double, double>> calls;
+  runOdometry(seq, cfg, [&](double done, double total) { calls.emplace_back(done, total); });
+  ASSERT_GE(calls.size(), 5u);  // every 0.1 s of the sequence's 1 s, and the end
+  for (std::size_t i = 1; i < calls.size(); ++i) {
+    EXPECT_GE(calls[i].first, calls[i - 1].first);
+    EXPECT_EQ(calls[i].second, calls[0].second);
+  }
+  EXPECT_NEAR(calls[0].second, 1.0, 0.05);  // the frames' span within the requested second
+  EXPECT_EQ(calls.back().first, calls.back().second);
+}
+
 }  // namespace
 }  // namespace eds
