@@ -160,16 +160,19 @@ FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3&
   // Starting points to try as well: the frames' own constant-velocity prediction when the event pose
   // seeded the alignment (the event tracker can drift between frames: the frame must not follow it),
   // then, when the alignment failed, no motion since the last frame and half the velocity.
-  std::vector<SE3> others;
-  if (prior && (!tr.ok || tr.rmse > 1.15 * last_rmse_)) others.push_back(T_w_cv);
+  // The routine second start (both alignments fine so far) needs the fine levels only, like the first.
+  std::vector<std::pair<SE3, int>> others;  // start, pyramid levels (0: all)
+  const bool usual = tr.ok && !(tr.rmse > 1.15 * last_rmse_);
+  if (prior && (cfg_.frame_always_tries_cv || !usual))
+    others.emplace_back(T_w_cv, usual ? cfg_.prior_levels : 0);
   if (!tr.ok) {
-    others.push_back(last_T_w_f_);
-    others.push_back(interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5));
+    others.emplace_back(last_T_w_f_, 0);
+    others.emplace_back(interpolateGeodesic(last_T_w_f_, T_w_pred, 0.5), 0);
   }
-  for (const SE3& T_w_try : others) {
+  for (const auto& [T_w_try, levels] : others) {
     SE3 T_try = T_w_try.inverse() * T_w_kf_;
     double a_try = alpha_, b_try = beta_;
-    const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try);
+    const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try, levels);
     if ((tr2.ok && !tr.ok) || (tr2.ok == tr.ok && tr2.rmse < tr.rmse)) {
       T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
     }

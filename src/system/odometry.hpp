@@ -40,6 +40,11 @@ struct OdometryConfig {
   BootstrapConfig bootstrap;
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
   int prior_levels = 2;  // pyramid levels of the frame alignment when the event pose seeds it
+  // Events mode: the frame alignment always starts from the frames' own constant-velocity prediction
+  // too and keeps the lower residual (off: only when the event-seeded one is 15 % worse than usual).
+  // The two starts end in different minima along the direction one frame resolves least; ESIM rotation
+  // 0.236 -> 0.182 deg for one more alignment per frame.
+  bool frame_always_tries_cv = true;
   MappingConfig mapping;
   BackendConfig backend;
   FlowKeyframePolicyConfig policy;

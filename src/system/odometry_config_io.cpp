@@ -52,6 +52,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["frame_tracker.huber"] = &ft.huber, f["frame_tracker.affine"] = &ft.affine,
   f["frame_tracker.max_rmse"] = &ft.max_rmse;
   f["frame_tracker.min_residuals"] = &ft.min_residuals, f["frame_tracker.convergence"] = &ft.convergence;
+  f["frame_always_tries_cv"] = &c.frame_always_tries_cv;
   f["prior_levels"] = &c.prior_levels;
   MappingConfig& m = c.mapping;
   sel("mapping.points", m.points);
