@@ -26,12 +26,13 @@ struct RunArgs {
 };
 
 void runRun(RunArgs& a) {
-  OdometryConfig cfg;
+  const Sequence seq(a.sequence);
+  // Defaults for the sensor's size, then the file, then the command line.
+  OdometryConfig cfg = defaultOdometryConfig(seq.camera().width, seq.camera().height);
   if (!a.config.empty()) loadOdometryConfig(a.config, cfg);
   for (const auto& [opt, key] : a.keys)
     if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
   if (a.frames_only) cfg.use_events = false;
-  const Sequence seq(a.sequence);
   // A progress bar on a terminal (stderr), nothing when it is a file or a pipe.
   ProgressFn bar;
   if (isatty(fileno(stderr))) {

@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -167,6 +169,23 @@ void copyOdometryParameter(const OdometryConfig& from, OdometryConfig& to, const
   const auto b = f_to.find(key);
   if (a == f_from.end() || b == f_to.end()) throw std::invalid_argument("unknown parameter '" + key + "'");
   std::visit([&](auto* dst) { *dst = *std::get<decltype(dst)>(a->second); }, b->second);
+}
+
+OdometryConfig defaultOdometryConfig(int width, int height) {
+  OdometryConfig c;
+  if (width <= 0 || height <= 0)
+    throw std::invalid_argument("defaultOdometryConfig: sensor size must be positive");
+  constexpr double kSmall = 240.0 * 180.0, kLarge = 640.0 * 480.0;
+  const double px = static_cast<double>(width) * height;
+  if (px <= kSmall) return c;
+  // 0 at 240x180, 1 from 640x480 on.
+  const double f = std::min(1.0, (px - kSmall) / (kLarge - kSmall));
+  c.event_frame.num_events = static_cast<int>(std::lround(20000 + f * (80000 - 20000)));
+  c.event_frame.overlap = 0.5 + f * 0.1;
+  c.events.points.fraction = 0.12 + f * (0.07 - 0.12);
+  if (f >= 0.5) c.frame_tracker.levels += 1, c.bootstrap.tracker.levels += 1;
+  c.backend.points_per_keyframe = static_cast<int>(std::lround(300 * (1 + f)));
+  return c;
 }
 
 }  // namespace eds

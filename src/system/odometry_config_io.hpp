@@ -9,6 +9,13 @@
 
 namespace eds {
 
+// The defaults for a sensor of this size (DESIGN.md §2, the authors' configurations): 240×180 and
+// smaller keep OdometryConfig's; from 640×480 up (EDS dataset), event frames of 80k events with 60 %
+// overlap, 7 % of the pixels as event points, one more pyramid level for the frame alignment, and
+// twice the back-end points per keyframe. Sizes in between scale the event count with the pixels.
+// `eds run` starts from these, then applies --config, then the command line.
+OdometryConfig defaultOdometryConfig(int width, int height);
+
 // Overrides the parameters the YAML file names; InputError naming the file and the key for an unknown
 // key or a value of the wrong type.
 void loadOdometryConfig(const std::filesystem::path& file, OdometryConfig& cfg);

@@ -74,5 +74,33 @@ TEST(OdometryConfigIo, BadFilesNameFileLineAndKey) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(OdometryConfigIo, DefaultsFollowTheSensorSize) {
+  const OdometryConfig base;
+  const OdometryConfig small = defaultOdometryConfig(240, 180);
+  EXPECT_EQ(small.event_frame.num_events, base.event_frame.num_events);
+  EXPECT_EQ(small.events.points.fraction, base.events.points.fraction);
+  EXPECT_EQ(small.frame_tracker.levels, base.frame_tracker.levels);
+  // The EDS dataset's 640x480: the authors' 80k events, 60 % overlap, 7 % of the pixels.
+  const OdometryConfig vga = defaultOdometryConfig(640, 480);
+  EXPECT_EQ(vga.event_frame.num_events, 80000);
+  EXPECT_NEAR(vga.event_frame.overlap, 0.6, 1e-12);
+  EXPECT_NEAR(vga.events.points.fraction, 0.07, 1e-12);
+  EXPECT_EQ(vga.frame_tracker.levels, base.frame_tracker.levels + 1);
+  EXPECT_EQ(vga.backend.points_per_keyframe, 2 * base.backend.points_per_keyframe);
+  EXPECT_EQ(defaultOdometryConfig(1280, 720).event_frame.num_events, 80000);
+  // DAVIS346 (346x260) lies in between.
+  const int n346 = defaultOdometryConfig(346, 260).event_frame.num_events;
+  EXPECT_GT(n346, 20000);
+  EXPECT_LT(n346, 40000);
+  EXPECT_THROW(defaultOdometryConfig(0, 480), std::invalid_argument);
+  // A file still overrides them.
+  const auto dir = test::tempDir("sensor_defaults");
+  { std::ofstream(dir / "c.yaml") << "event_frame:\n  num_events: 50000\n"; }
+  OdometryConfig c = vga;
+  loadOdometryConfig(dir / "c.yaml", c);
+  EXPECT_EQ(c.event_frame.num_events, 50000);
+  EXPECT_NEAR(c.event_frame.overlap, 0.6, 1e-12);
+}
+
 }  // namespace
 }  // namespace eds
