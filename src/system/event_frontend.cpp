@@ -89,22 +89,27 @@ std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, 
     const SE3 T_step = T_ef_kf_ * T_prev_.inverse();
     T_init = SE3::exp(std::clamp(s, 0.0, 3.0) * T_step.log()) * T_ef_kf_;
   }
-  SE3 T = T_init;
-  Vec6 nu = nu_;
   PosePrior motion;
   const bool use_motion = !prior && motionPrior(ef.t, motion);
   // Coarse-to-fine only when the prediction is weak (first frames on a reference); a frame's
   // correction or a constant-velocity prediction is close enough for the finest level alone.
-  const TrackResult tr = tracker_.track(ef, T, nu, !prior && (t_prev_ >= 0 || corrected_) ? 1 : 0,
-                                        use_motion ? &motion : nullptr);
+  const int levels = !prior && (t_prev_ >= 0 || corrected_) ? 1 : 0;
   corrected_ = false;
+  return solve(ef, T_init, levels, use_motion ? &motion : nullptr, failure);
+}
+
+std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init, int levels,
+                                        const PosePrior* motion, std::string* failure) {
+  SE3 T = T_init;
+  Vec6 nu = nu_;
+  const TrackResult tr = tracker_.track(ef, T, nu, levels, motion);
   if (std::getenv("EDS_DEBUG")) {
-    const Vec6 dev = use_motion ? Vec6((T * motion.T_ef_kf.inverse()).log()) : Vec6::Zero();
+    const Vec6 dev = motion ? Vec6((T * motion->T_ef_kf.inverse()).log()) : Vec6::Zero();
     std::fprintf(stderr,
                  "[events] t %.3f corr %.3f it %d pts %d prior %d sigma_t %.4f dev_t %.4f dev_r %.4f "
                  "init_dev_t %.4f\n",
-                 toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, use_motion,
-                 use_motion ? motion.sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
+                 toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, motion != nullptr,
+                 motion ? motion->sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
                  (T * T_init.inverse()).translation().norm());
   }
   if (!tr.ok) {
@@ -138,11 +143,17 @@ bool EventFrontend::motionPrior(TimeNs t, PosePrior& prior) const {
   const double s = toSeconds(t - t_f1_) / gap;
   const SE3 T_w_pred = T_w_f1_ * SE3::exp(s * (T_w_f0_.inverse() * T_w_f1_).log());
   prior.T_ef_kf = T_w_pred.inverse() * T_w_kf_;
-  const double grow = 1.0 + std::sqrt(2.0) * dt / gap;
+  prior.sigma = priorSigma(dt, 1.0 + std::sqrt(2.0) * dt / gap);
+  return true;
+}
+
+Vec6 EventFrontend::priorSigma(double dt, double grow) const {
+  const MotionPriorConfig& mc = cfg_.motion_prior;
   const double st = median_depth_ * (mc.sigma_translation * grow + 0.5 * mc.accel * dt * dt);
   const double sr = mc.sigma_rotation * grow + 0.5 * mc.ang_accel * dt * dt;
-  prior.sigma << st, st, st, sr, sr, sr;
-  return true;
+  Vec6 sigma;
+  sigma << st, st, st, sr, sr, sr;
+  return sigma;
 }
 
 }  // namespace eds

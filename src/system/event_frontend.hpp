@@ -68,6 +68,9 @@ class EventFrontend {
   TimeNs t_f0_ = -1, t_f1_ = -1;
   SE3 T_w_f0_, T_w_f1_;
   bool motionPrior(TimeNs t, PosePrior& prior) const;
+  Vec6 priorSigma(double dt, double grow) const;
+  std::optional<SE3> solve(const EventFrame& ef, const SE3& T_init, int levels, const PosePrior* motion,
+                           std::string* failure);
 };
 
 }  // namespace eds

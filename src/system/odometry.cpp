@@ -156,6 +156,10 @@ class Runner {
     odo_.adoptReference(true);
     syncReference();
     buffered_.clear();
+    // The bootstrap's last two frames start the motion prior (and the tracking) of the live events.
+    const std::size_t n = res_.frames.size();
+    if (n >= 2) events_.correct(res_.frames[n - 2].t, res_.frames[n - 2].T_w_c);
+    if (n >= 1) events_.correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
   }
 
   // During the bootstrap the events track against its reference (its current inverse depths; 1 at
