@@ -145,29 +145,25 @@ double priorCost(const PosePrior* prior, double scale, const SE3& T, Vec6* e_out
 int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior,
                              Eigen::VectorXd& r, Eigen::MatrixXd& J, double& cost_out,
                              int& iterations) const {
-  use_set_ = false;
-  int n = evaluate(img, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
-  if (n < cfg_.min_points) return n;
   // This solve's points: those in view at its start, a margin inside the border (a solve moves them a
   // pixel or two; only a runaway takes them out).
-  {
-    const Mat3 R = T_ef_kf.rotationMatrix();
-    const Vec3 t = T_ef_kf.translation();
-    const double lo = cfg_.border + cfg_.set_margin, hi_x = img.cols - 1 - lo, hi_y = img.rows - 1 - lo;
-    solve_set_.clear();
-    for (const int i : idx_) {
-      const Vec3 q = R * p_kf_[i] + t;
-      const double ux = cam_.fx * q.x() / q.z() + cam_.cx, uy = cam_.fy * q.y() / q.z() + cam_.cy;
-      if (ux >= lo && uy >= lo && ux <= hi_x && uy <= hi_y) solve_set_.push_back(i);
-    }
+  const Mat3 R = T_ef_kf.rotationMatrix();
+  const Vec3 t = T_ef_kf.translation();
+  const double lo = cfg_.border + cfg_.set_margin, hi_x = img.cols - 1 - lo, hi_y = img.rows - 1 - lo;
+  solve_set_.clear();
+  for (std::size_t i = 0; i < p_kf_.size(); ++i) {
+    const Vec3 q = R * p_kf_[i] + t;
+    if (q.z() <= 1e-6) continue;
+    const double ux = cam_.fx * q.x() / q.z() + cam_.cx, uy = cam_.fy * q.y() / q.z() + cam_.cy;
+    if (ux >= lo && uy >= lo && ux <= hi_x && uy <= hi_y) solve_set_.push_back(static_cast<int>(i));
   }
   use_set_ = true;
-  n = evaluate(img, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
-  if (n < cfg_.min_points) return n;
-  struct Reset {
+  struct Reset {  // evaluate() called from outside a solve sees every point again
     bool& flag;
     ~Reset() { flag = false; }
   } reset{use_set_};
+  int n = evaluate(img, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
+  if (n < cfg_.min_points) return n;
   if (!(nu.norm() > 0)) {
     // ν from linear least squares A ν ≈ m at the initial pose: the best-aligned prediction.
     const Eigen::MatrixXd A = A_.topRows(n);

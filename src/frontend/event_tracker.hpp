@@ -33,9 +33,6 @@ struct EventTrackerConfig {
   int min_points = 30;           // fewer points in view: the frame cannot be tracked
   double min_correlation = 0.2;  // n̂·n below this after the solve: reported as a failure
   double lambda_initial = 1e-3;
-  // The EGM rows from the event camera's view at the start of each track() (egm.hpp egmRowInView);
-  // off: from the keyframe's view, as the paper writes Eq. 5. ν is then in the event camera's frame.
-  bool egm_in_event_view = true;
   void validate() const;
 };
 

@@ -70,14 +70,14 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   bool new_kf = wantKeyframe(fl, alpha);
   // A keyframe taken ahead of need waits for nothing: while the back-end is busy, the next frame
   // decides again.
-  if (!new_kf && !worker_.busy()) new_kf = keyframeDueBeforeNextFrame(T_f_kf, alpha);
+  if (!new_kf && !worker_.busy()) new_kf = keyframeDueBeforeNextFrame(T_f_kf);
   if (new_kf && worker_.busy()) {
     // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
     // run away from its map), take the new reference and track again against it.
     adoptReference(true);
     tr = align(img, prior, T_f_kf, alpha, beta);
     fl = flowOf(ref_.points, T_f_kf, cam_);
-    new_kf = wantKeyframe(fl, alpha) || keyframeDueBeforeNextFrame(T_f_kf, alpha);
+    new_kf = wantKeyframe(fl, alpha) || keyframeDueBeforeNextFrame(T_f_kf);
   }
   res_.track_ms.push_back(msSince(t0));
   last_ok_ = tr.ok;
@@ -127,7 +127,7 @@ bool FrameFrontend::wantKeyframe(const Flow& fl, double alpha) const {
          fl.in_view < cfg_.policy.min_in_view || std::abs(std::log(alpha)) > cfg_.policy.max_log_alpha;
 }
 
-bool FrameFrontend::keyframeDueBeforeNextFrame(const SE3& T_f_kf, double alpha) const {
+bool FrameFrontend::keyframeDueBeforeNextFrame(const SE3& T_f_kf) const {
   const double f = cfg_.policy.lookahead;
   if (!cfg_.use_events || !(f > 0) || !has_last_) return false;
   // The events track against this keyframe until the next frame: at constant velocity (one more

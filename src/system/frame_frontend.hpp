@@ -43,7 +43,7 @@ class FrameFrontend {
   BackendWorker& worker() { return worker_; }
 
  private:
-  bool keyframeDueBeforeNextFrame(const SE3& T_f_kf, double alpha) const;
+  bool keyframeDueBeforeNextFrame(const SE3& T_f_kf) const;
   bool wantKeyframe(const Flow& fl, double alpha) const;
   FrameTrackResult align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha, double& beta);
 
