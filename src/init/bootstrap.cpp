@@ -78,8 +78,15 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     return false;
   }
   if (geo_state_ != GeoState::kUnavailable) {
+    // The planar verdict holds for this frame only: a homography also explains a rotation-dominated
+    // motion of a scene with depth (a hand-held camera shaking before it translates), and a verdict
+    // taken then would let the constant-depth photometric path succeed on a 3D scene.
+    geo_state_ = GeoState::kPending;
     const std::optional<GeometricInitResult> g = geo_.add(image);
     if (g && g->planar) geo_state_ = GeoState::kPlanar;
+    if (g && std::getenv("EDS_DEBUG"))
+      std::fprintf(stderr, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg\n",
+                   frames_.size(), g->planar, g->inliers, g->parallax_deg);
     if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
     if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
   }

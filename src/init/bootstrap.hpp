@@ -12,7 +12,8 @@
 // tracks show a non-planar scene with enough parallax, the essential matrix gives the pose and
 // triangulation the depths (filled into the reference's points), the two-frame photometric BA refines
 // them, and the frames in between are aligned to the new map. The photometric path may only declare
-// success once the tracks have shown the scene to be planar (or there are too few tracks to tell).
+// success on a frame whose tracks show the scene to be planar (or when there are too few tracks to
+// tell): a verdict from an earlier frame may have come from a rotation, which a homography explains too.
 #include <optional>
 #include <vector>
 

@@ -98,6 +98,26 @@ std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, 
   return solve(ef, T_init, levels, use_motion ? &motion : nullptr, failure);
 }
 
+std::optional<SE3> EventFrontend::trackBetween(const EventFrame& ef, TimeNs t_a, const SE3& T_w_a, TimeNs t_b,
+                                               const SE3& T_w_b, std::string* failure) {
+  if (!has_ref_) return std::nullopt;
+  const double span = toSeconds(t_b - t_a);
+  const double s = span > 0 ? std::clamp(toSeconds(ef.t - t_a) / span, 0.0, 1.0) : 0.0;
+  const SE3 T_w_pred = T_w_a * SE3::exp(s * (T_w_a.inverse() * T_w_b).log());
+  PosePrior motion;
+  motion.T_ef_kf = T_w_pred.inverse() * T_w_kf_;
+  const MotionPriorConfig& mc = cfg_.motion_prior;
+  // Both ends are measured: the interpolation's own error is the acceleration's, largest midway.
+  const double dt2 = s * (1 - s) * span * span;
+  const double st = median_depth_ * (mc.sigma_translation + 0.5 * mc.accel * dt2);
+  const double sr = mc.sigma_rotation + 0.5 * mc.ang_accel * dt2;
+  motion.sigma << st, st, st, sr, sr, sr;
+  corrected_ = false;
+  // Frames farther apart than max_gap_s say too little about the motion in between (as in track()).
+  const bool use_motion = mc.enabled && span <= mc.max_gap_s;
+  return solve(ef, motion.T_ef_kf, 0, use_motion ? &motion : nullptr, failure);
+}
+
 std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init, int levels,
                                         const PosePrior* motion, std::string* failure) {
   SE3 T = T_init;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -148,10 +149,14 @@ class Runner {
       const SE3 AB = A.inverse() * B;
       const double max_t = 0.5 * AB.translation().norm() + cfg_.buffered_gate_translation;
       const double max_r = 0.5 * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
-      trackEvents(ef, &prior, [&](const SE3& T) {
-        const SE3 d = prior.inverse() * T;
-        return d.translation().norm() <= max_t && d.so3().angle() <= max_r;
-      });
+      const bool between = it != boot_traj.begin() && it != boot_traj.end();
+      trackEvents(
+          ef, &prior,
+          [&](const SE3& T) {
+            const SE3 d = prior.inverse() * T;
+            return d.translation().norm() <= max_t && d.so3().angle() <= max_r;
+          },
+          between ? std::make_pair(&*(it - 1), &*it) : std::pair<const StampedPose*, const StampedPose*>{});
     }
     odo_.adoptReference(true);
     syncReference();
@@ -184,11 +189,16 @@ class Runner {
     event_ref_id_ = odo_.referenceId();
   }
 
+  // `bracket`: the frames before and after a buffered event frame (its start and motion prior).
   void trackEvents(const EventFrame& ef, const SE3* prior,
-                   const std::function<bool(const SE3&)>& plausible = nullptr) {
+                   const std::function<bool(const SE3&)>& plausible = nullptr,
+                   const std::pair<const StampedPose*, const StampedPose*>& bracket = {}) {
     const auto t0 = Clock::now();
     std::string why;
-    const std::optional<SE3> T = events_.track(ef, prior, &why);
+    const std::optional<SE3> T = bracket.first
+                                     ? events_.trackBetween(ef, bracket.first->t, bracket.first->T_w_c,
+                                                            bracket.second->t, bracket.second->T_w_c, &why)
+                                     : events_.track(ef, prior, &why);
     res_.event_track_ms.push_back(msSince(t0));
     if (!T) {
       res_.failures.push_back({ef.t, "event frame: " + why});

@@ -1,4 +1,5 @@
-// Bootstrap on simulated frames: a textured plane along the built-in hand-held motion, 25 Hz.
+// Bootstrap on simulated frames of the built-in room along the built-in hand-held motion: depths up to
+// scale and the last frame's pose against the simulator's truth.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,24 +16,30 @@ namespace {
 CameraModel camera() { return test::simCamera(); }
 using Frames = test::FrameSink;
 
-TEST(Bootstrap, InitializesPoseAndDepthsUpToScale) {
-  const sim::Motion motion{sim::handheldMotion(2.5, 4)};
-  sim::Scene scene = sim::makePreset("room", motion, 4);
+// max_t_err: translation error of the last frame, relative to its distance from the reference.
+void checkBootstrap(double seconds, unsigned seed, double fps, std::size_t max_frames, double max_t_err) {
+  const sim::Motion motion{sim::handheldMotion(seconds, seed)};
+  sim::Scene scene = sim::makePreset("room", motion, seed);
   scene.loadTextures();
   sim::SimConfig cfg;
-  cfg.fps = 25;
-  cfg.render.supersample = 2;
+  cfg.fps = fps;
   cfg.events.C_pos = cfg.events.C_neg = 1.0;  // events are not needed here
   Frames f;
   sim::Simulator(scene, camera(), motion, cfg).run(motion.start(), motion.end(), f);
 
+  // As `eds run` sees them: 8-bit frames (the sequence's PNGs).
+  for (cv::Mat& im : f.images) {
+    cv::Mat q;
+    im.convertTo(q, CV_8U, 255.0);
+    q.convertTo(im, CV_32F, 1.0 / 255.0);
+  }
   Bootstrap boot(camera(), {});
   std::size_t i = 0;
   while (i < f.images.size() && !boot.add(f.times[i], f.images[i])) ++i;
   ASSERT_LT(i, f.images.size()) << "never initialized";
   std::printf("[ bootstrap ] initialized after %zu frames, %d restarts, parallax %.1f px, rmse %.4f\n", i + 1,
               boot.restarts(), boot.parallax(), boot.rmse());
-  EXPECT_LE(i, 40u);
+  EXPECT_LE(i, max_frames);
 
   const Keyframe& ref = boot.reference();
   const std::size_t r = std::find(f.times.begin(), f.times.end(), ref.t) - f.times.begin();
@@ -62,9 +69,18 @@ TEST(Bootstrap, InitializesPoseAndDepthsUpToScale) {
   std::printf("[ bootstrap ] rotation error %.3f deg, translation error %.1f %% of %.1f cm\n", rot_err,
               t_err * 100, T_ref_c_true.translation().norm() * 100);
   EXPECT_LT(rot_err, 0.2);
-  EXPECT_LT(t_err, 0.05);
+  EXPECT_LT(t_err, max_t_err);
   EXPECT_THROW(boot.add(f.times.back(), f.images.back()), std::logic_error);
 }
+
+TEST(Bootstrap, InitializesPoseAndDepthsUpToScale) { checkBootstrap(2.5, 4, 25, 40, 0.05); }
+
+// This motion shakes (mostly rotation) for 1.6 s before it translates. A homography explains the
+// shaking as well as an essential matrix does, and when that verdict stuck, the constant-depth
+// photometric path declared success on the room's 3D structure with wrong depths (frames-only ATE
+// 1.8 cm over the 3 s instead of 0.13 cm; here 15 % depth and 78 % translation error). The essential
+// matrix's pose, refined by the two-frame BA, is a few % off in translation.
+TEST(Bootstrap, ShakingBeforeTranslatingIsNotTakenForAPlane) { checkBootstrap(3.0, 5, 20, 50, 0.1); }
 
 TEST(Bootstrap, FlatFramesNeverInitializeAndBadConfigIsAnError) {
   Bootstrap boot(camera(), {});
