@@ -114,6 +114,9 @@ void addRunCommand(CLI::App& app) {
        "New keyframe points take the depth of the nearest projected map point only");
   flag("!--sync-backend", c.threaded_backend, "threaded_backend",
        "Run the back-end after each keyframe in the tracking thread (deterministic results)");
+  flag("!--no-keyframe-wait", c.wait_for_keyframe, "wait_for_keyframe",
+       "Threaded back-end: tracking never waits for a new keyframe to be mapped (live cameras; "
+       "less accurate)");
   flag("--marginalization", c.backend.marginalize, "backend.marginalize",
        "Keep old keyframes' information as a prior (experimental: no first-estimate Jacobians yet)");
   cmd->callback([a] { runRun(*a); });

@@ -55,23 +55,38 @@ FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
                                std::vector<KeyframePoint> pts_with_depth) {
   worker_.submit({t, img, T_w_new, a, b, std::move(pts_with_depth)});
-  if (cfg_.threaded_backend) return T_w_new;
+  if (cfg_.threaded_backend) {
+    setPending(T_w_new, a);
+    return T_w_new;
+  }
   adoptReference(false);
   return T_w_kf_;
 }
 
 SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
-  adoptReference(!has_ref_);
+  const bool wait = !has_ref_ || (pending_.active && cfg_.wait_for_keyframe);
+  if (wait && cfg_.threaded_backend && worker_.busy()) ++res_.backend_waits;
+  adoptReference(wait);
   const auto t0 = Clock::now();
   SE3 T_f_kf;
   double alpha = 1, beta = 0;
   FrameTrackResult tr = align(img, prior, T_f_kf, alpha, beta);
-  Flow fl = flowOf(ref_.points, T_f_kf, cam_);
-  bool new_kf = wantKeyframe(fl, alpha);
-  // A keyframe taken ahead of need waits for nothing: while the back-end is busy, the next frame
-  // decides again.
-  if (!new_kf && !worker_.busy()) new_kf = keyframeDueBeforeNextFrame(T_f_kf);
+  Flow fl;
+  bool new_kf;
+  if (pending_.active) {
+    // Motion since the keyframe the back-end is working on.
+    const SE3 T_f_pending = (T_w_kf_ * T_f_kf.inverse()).inverse() * pending_.T_w_kf;
+    fl = flowOf(pending_.points, T_f_pending, cam_);
+    new_kf = wantKeyframe(fl, alpha * std::exp(a_kf_ - pending_.a));
+  } else {
+    fl = flowOf(ref_.points, T_f_kf, cam_);
+    new_kf = wantKeyframe(fl, alpha);
+    // A keyframe taken ahead of need waits for nothing: while the back-end is busy, the next frame
+    // decides again.
+    if (!new_kf && !worker_.busy()) new_kf = keyframeDueBeforeNextFrame(T_f_kf);
+  }
   if (new_kf && worker_.busy()) {
+    ++res_.backend_waits;
     // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
     // run away from its map), take the new reference and track again against it.
     adoptReference(true);
@@ -113,12 +128,34 @@ bool FrameFrontend::adoptReference(bool wait) {
   a_kf_ = ref->a, b_kf_ = ref->b;
   ref_ = std::move(ref->kf);
   ref_id_ = ref->id;
+  pending_.active = false;
   has_ref_ = !ref_.points.empty();
   ref_depth_ratio_ = depthRatio(ref_.points);
   if (has_ref_) tracker_.setKeyframe(ref_);
   // The last frame's brightness, relative to the new reference.
   alpha_ = std::exp(a_last_ - a_kf_), beta_ = b_last_ - alpha_ * b_kf_;
   return true;
+}
+
+void FrameFrontend::setPending(const SE3& T_w_new, double a) {
+  pending_.active = true;
+  pending_.T_w_kf = T_w_new;
+  pending_.a = a;
+  pending_.points.clear();
+  // The reference's points that the new keyframe sees, in its pixels (a stand-in for its own points,
+  // which the back-end is still mapping).
+  const SE3 T_new_kf = T_w_new.inverse() * T_w_kf_;
+  for (const KeyframePoint& p : ref_.points) {
+    if (!(p.inv_depth > 0)) continue;
+    const Vec3 X = T_new_kf * (Vec3((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0) / p.inv_depth);
+    if (X.z() <= 1e-9) continue;
+    KeyframePoint q;
+    q.u = static_cast<float>(cam_.fx * X.x() / X.z() + cam_.cx);
+    q.v = static_cast<float>(cam_.fy * X.y() / X.z() + cam_.cy);
+    if (q.u < 0 || q.v < 0 || q.u > cam_.width - 1 || q.v > cam_.height - 1) continue;
+    q.inv_depth = 1.0 / X.z();
+    pending_.points.push_back(q);
+  }
 }
 
 bool FrameFrontend::wantKeyframe(const Flow& fl, double alpha) const {

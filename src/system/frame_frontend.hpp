@@ -62,6 +62,16 @@ class FrameFrontend {
   double last_rmse_ = 1e9;          // of the last successful alignment
   SE3 last_T_w_f_, prev_T_w_f_;
   bool has_last_ = false, has_prev_ = false;
+  // A keyframe handed to the threaded back-end and not yet published as the reference: the policy
+  // measures the motion from it (the reference's points seen from it), not from the reference, or
+  // the frame after every keyframe would ask for one more and wait for the back-end.
+  struct Pending {
+    bool active = false;
+    SE3 T_w_kf;
+    double a = 0;
+    std::vector<KeyframePoint> points;
+  } pending_;
+  void setPending(const SE3& T_w_new, double a);
 };
 
 }  // namespace eds

@@ -330,7 +330,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"tracked", r.tracked},           {"failures", r.failures.size()},
                  {"event_frames", r.event_frames}, {"event_frames_tracked", r.events_tracked},
                  {"event_poses", r.events.size()}, {"keyframes", r.keyframes.size()},
-                 {"map_points", r.map.size()}};
+                 {"map_points", r.map.size()},     {"backend_waits", r.backend_waits}};
   j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},
                      {"event_tracking", timingStats(r.event_track_ms)},
                      {"mapping", timingStats(r.mapping_ms)},

@@ -51,6 +51,11 @@ struct OdometryConfig {
   // The back-end in its own thread (tracking never waits for it, except when a keyframe is due while
   // the previous one is still being mapped). Off: after each keyframe, deterministic results.
   bool threaded_backend = true;
+  // Threaded back-end: the frame after a keyframe waits until the back-end has mapped and optimized
+  // it, and is tracked against it (as DSO runs recorded data by default). Off: tracking never waits
+  // (a live camera), and events and frames track against the previous keyframe meanwhile; measured
+  // less accurate (ESIM rotation 0.17 -> 0.22-0.29 deg) and ~20 % faster.
+  bool wait_for_keyframe = true;
   // Events track the camera between frames (EDS); off: frames only.
   bool use_events = true;
   EventFrameConfig event_frame;
@@ -80,6 +85,7 @@ struct OdometryResult {
   Trajectory keyframes;  // final (optimized) keyframe poses
   std::vector<MapPoint> map;
   std::size_t frames_in = 0, tracked = 0;
+  std::size_t backend_waits = 0;  // times the tracking thread waited for the threaded back-end
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization
   TimeNs first_t = 0;  // first frame considered

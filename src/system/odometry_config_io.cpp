@@ -76,6 +76,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["policy.lookahead"] = &c.policy.lookahead,
   f["policy.lookahead_depth_ratio"] = &c.policy.lookahead_depth_ratio;
   f["threaded_backend"] = &c.threaded_backend, f["use_events"] = &c.use_events;
+  f["wait_for_keyframe"] = &c.wait_for_keyframe;
   f["event_frame.num_events"] = &c.event_frame.num_events, f["event_frame.overlap"] = &c.event_frame.overlap;
   f["event_frame.sigma_frac"] = &c.event_frame.sigma_frac, f["event_frame.blur"] = &c.event_frame.blur;
   EventTrackerConfig& et = c.events.tracker;
