@@ -118,7 +118,7 @@ void addRunCommand(CLI::App& app) {
        "Threaded back-end: tracking never waits for a new keyframe to be mapped (live cameras; "
        "less accurate)");
   flag("--marginalization", c.backend.marginalize, "backend.marginalize",
-       "Keep old keyframes' information as a prior (experimental: no first-estimate Jacobians yet)");
+       "Keep old keyframes' information as a prior (first-estimate Jacobians; off by default)");
   cmd->callback([a] { runRun(*a); });
 }
 

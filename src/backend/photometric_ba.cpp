@@ -50,14 +50,33 @@ struct PairTransforms {
   }
 };
 
+// The frames as their Jacobians are evaluated (DSO's first-estimate Jacobians): frames the prior holds
+// at the prior's linearization point, the others at the current state.
+struct LinearizationState {
+  const std::vector<BaFrame>* frames = nullptr;
+  const PairTransforms* pairs = nullptr;
+};
+
+namespace {
+std::vector<BaFrame> linearizationFrames(const std::vector<BaFrame>& frames, const BaPrior* prior) {
+  std::vector<BaFrame> lin = frames;
+  if (!prior) return lin;
+  for (std::size_t i = 0; i < prior->frames.size(); ++i) {
+    BaFrame& f = lin[prior->frames[i]];
+    f.T_w_c = prior->T0[i], f.a = prior->a0[i], f.b = prior->b0[i];
+  }
+  return lin;
+}
+}  // namespace
+
 bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host,
                                  float u, float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
-                                 Eigen::Matrix<double, 8, 17>* J, const double* host_values) const {
+                                 Eigen::Matrix<double, 8, 17>* J, const double* host_values,
+                                 const LinearizationState* lin) const {
   const BaFrame& H = frames[host];
   const BaFrame& T = frames[target];
   const int pi = host * pairs.F + target;
   const SE3& T_t_h = pairs.T_t_h[pi];
-  const Mat3& R_t_w = pairs.R_t_w[pi];
   const Mat3& R_t_h = pairs.R_t_h[pi];
   const double e = pairs.e[pi];
   const int W = H.image.cols, Hh = H.image.rows;
@@ -76,22 +95,29 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
     const double I_t = sampleBilinear(T.image, ut, vt, dx, dy);
     r[k] = I_t - T.b - e * (I_h - H.b);
     if (J) {
-      const Eigen::RowVector3d dI_dX(dx * cam_.fx * iz, dy * cam_.fy * iz,
-                                     -(dx * cam_.fx * X_t.x() + dy * cam_.fy * X_t.y()) * iz * iz);
-      const Eigen::RowVector3d g = dI_dX * R_t_w;
-      const Vec3 X_w = H.T_w_c * X_h;
+      // First-estimate Jacobians: the geometry (projection, frame poses, brightness) at the frames'
+      // linearization points; only the image gradient is taken at the current projection.
+      const PairTransforms& G = lin ? *lin->pairs : pairs;
+      const BaFrame& Hg = lin ? (*lin->frames)[host] : H;
+      const Vec3 X_g = G.R_t_h[pi] * X_h + G.T_t_h[pi].translation();
+      const double izg = X_g.z() > 1e-6 ? 1.0 / X_g.z() : iz;
+      const double eg = G.e[pi];
+      const Eigen::RowVector3d dI_dX(dx * cam_.fx * izg, dy * cam_.fy * izg,
+                                     -(dx * cam_.fx * X_g.x() + dy * cam_.fy * X_g.y()) * izg * izg);
+      const Eigen::RowVector3d g = dI_dX * G.R_t_w[pi];
+      const Vec3 X_w = Hg.T_w_c * X_h;
       // X_t = T_w_t^-1 X_w: a left perturbation of the target moves X_t by -R_t_w (δv + δω x X_w),
       // one of the host moves X_w by (δv + δω x X_w).
       const Eigen::RowVector3d gx = X_w.cross(g.transpose()).transpose();
       J->block<1, 3>(k, 0) = g;
       J->block<1, 3>(k, 3) = gx;
-      (*J)(k, 6) = e * (I_h - H.b);
-      (*J)(k, 7) = e;
+      (*J)(k, 6) = eg * (I_h - Hg.b);
+      (*J)(k, 7) = eg;
       J->block<1, 3>(k, 8) = -g;
       J->block<1, 3>(k, 11) = -gx;
-      (*J)(k, 14) = -e * (I_h - H.b);
+      (*J)(k, 14) = -eg * (I_h - Hg.b);
       (*J)(k, 15) = -1.0;
-      (*J)(k, 16) = dI_dX * (R_t_h * (-x_h / (rho * rho)));
+      (*J)(k, 16) = dI_dX * (G.R_t_h[pi] * (-x_h / (rho * rho)));
     }
   }
   return true;
@@ -217,7 +243,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   NormalEquations ne;
   std::vector<double> hpp_d(np);
   for (int it = 0; it < cfg_.iterations; ++it, ++stats.iterations) {
-    accumulate(frames, points, rho, gw, slot, dim, ne);
+    accumulate(frames, points, rho, gw, slot, dim, ne, prior);
     if (prior) {
       // Gradient b + Hx at the current state; Hessian blocks between free frames only.
       const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);
@@ -305,9 +331,12 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
 void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
                                const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                                const std::vector<int>& slot, int dim, NormalEquations& ne,
-                               int only_host) const {
+                               const BaPrior* prior, int only_host) const {
   const double d = cfg_.huber;
   const PairTransforms pairs(frames);
+  const std::vector<BaFrame> lin_frames = linearizationFrames(frames, prior);
+  const PairTransforms lin_pairs(lin_frames);
+  const LinearizationState lin{&lin_frames, &lin_pairs};
   const auto np = static_cast<Eigen::Index>(points.size());
   ne.Hff = Eigen::MatrixXd::Zero(dim, dim);
   ne.bf = Eigen::VectorXd::Zero(dim);
@@ -326,7 +355,7 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
       ne.bp[i] += p.prior_weight * (rho[i] - p.prior_inv_depth);
     }
     for (int t : p.targets) {
-      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data())) continue;
+      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data(), &lin)) continue;
       const int sh = slot[p.host], st = slot[t];
       for (int k = 0; k < 8; ++k) {
         const double a = std::abs(r[k]);
@@ -371,7 +400,19 @@ BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std
   NormalEquations ne;
   std::vector<double> rho(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) rho[i] = points[i].inv_depth;
-  accumulate(frames, points, rho, hostPatterns(frames, points), slot, dim, ne, m);
+  accumulate(frames, points, rho, hostPatterns(frames, points), slot, dim, ne, prior, m);
+  // The residuals are linearized at the current state, their Jacobians at the linearization point
+  // x0 (first estimates): r(x) ≈ r + J (δ − δ_now), with δ = x ⊟ x0. In terms of δ the gradient is
+  // Jᵀr − JᵀJ δ_now; δ_now is zero except for the frames the old prior already holds at their x0.
+  Eigen::VectorXd d_now = Eigen::VectorXd::Zero(dim);
+  if (prior && !prior->empty()) {
+    const Eigen::VectorXd dp = prior->delta(frames);
+    for (std::size_t i = 0; i < prior->frames.size(); ++i)
+      d_now.segment<8>(8 * prior->frames[i]) = dp.segment<8>(8 * i);
+  }
+  ne.bf.noalias() -= ne.Hff * d_now;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    ne.bp[i] -= ne.Hfp.col(static_cast<Eigen::Index>(i)).dot(d_now);
   Eigen::MatrixXd H = ne.Hff;
   Eigen::VectorXd b = ne.bf;
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -380,12 +421,14 @@ BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std
     H.noalias() -= col * col.transpose() / ne.Hpp[i];
     b.noalias() -= col * (ne.bp[i] / ne.Hpp[i]);
   }
+  // The old prior joins as it is: same variables, same linearization points (never relinearized).
+  std::vector<int> in_prior(F, -1);
   if (prior && !prior->empty()) {
-    const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);
     const int np = static_cast<int>(prior->frames.size());
     for (int i = 0; i < np; ++i) {
       const int si = prior->frames[i];
-      b.segment<8>(si * 8) += g.segment<8>(8 * i);
+      in_prior[si] = i;
+      b.segment<8>(si * 8) += prior->b.segment<8>(8 * i);
       for (int j = 0; j < np; ++j)
         H.block<8, 8>(si * 8, prior->frames[j] * 8) += prior->H.block<8, 8>(8 * i, 8 * j);
     }
@@ -412,9 +455,10 @@ BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std
   out.H = 0.5 * (out.H + out.H.transpose());
   out.b = bk - Hkm * ldlt.solve(b.segment<8>(8 * m));
   for (int f : keep) {
-    out.T0.push_back(frames[f].T_w_c);
-    out.a0.push_back(frames[f].a);
-    out.b0.push_back(frames[f].b);
+    const int i = in_prior[f];
+    out.T0.push_back(i >= 0 ? prior->T0[i] : frames[f].T_w_c);
+    out.a0.push_back(i >= 0 ? prior->a0[i] : frames[f].a);
+    out.b0.push_back(i >= 0 ? prior->b0[i] : frames[f].b);
   }
   return out;
 }

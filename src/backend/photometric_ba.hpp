@@ -8,10 +8,11 @@
 // step costs O(residuals) plus a dense solve of 8 parameters per keyframe.
 //
 // Gauge: frames marked `fixed` are held (the window holds its oldest keyframe). Information of
-// keyframes and points that leave the window is kept as a Gaussian prior (BaPrior, from marginalize()),
-// which is what holds the monocular scale and keeps drift down. The prior's residual Jacobians are
-// taken at the current estimate, not at a first estimate (DSO's FEJ): the window is short and the
-// estimates move little once a keyframe is old enough to be marginalized.
+// keyframes and points that leave the window can be kept as a Gaussian prior (BaPrior, from
+// marginalize()). With DSO's first-estimate Jacobians: once a frame is in the prior, every Jacobian
+// that involves it is taken at the prior's linearization point of it (residuals and image gradients
+// at the current state), and the prior is never relinearized. Otherwise the prior, combined with
+// residuals linearized elsewhere, gains information along the gauge (the monocular scale) and pulls it.
 #include <array>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -70,8 +71,9 @@ struct BaStats {
   int outliers_removed = 0;
 };
 
-struct NormalEquations;  // defined in photometric_ba.cpp
-struct PairTransforms;   // defined in photometric_ba.cpp
+struct NormalEquations;     // defined in photometric_ba.cpp
+struct PairTransforms;      // defined in photometric_ba.cpp
+struct LinearizationState;  // defined in photometric_ba.cpp
 
 // Per point: the gradient weight c²/(c²+|∇I|²) and the host intensity of each pattern pixel (both
 // constant during a solve).
@@ -104,17 +106,20 @@ class PhotometricBA {
   // host_values: the 8 host intensities (HostPattern::I), or null to sample them.
   bool evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host, float u,
                     float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
-                    Eigen::Matrix<double, 8, 17>* J, const double* host_values = nullptr) const;
+                    Eigen::Matrix<double, 8, 17>* J, const double* host_values = nullptr,
+                    const LinearizationState* lin = nullptr) const;
   std::vector<HostPattern> hostPatterns(const std::vector<BaFrame>& frames,
                                         const std::vector<BaPoint>& points) const;
   double cost(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
               const std::vector<double>& rho, const std::vector<HostPattern>& gw, const BaPrior* prior,
               double* rmse, int* count) const;
   // Accumulates the normal equations of the photometric terms (and point priors); frames with
-  // slot < 0 are constant. only_host >= 0: only the points hosted in that frame.
+  // slot < 0 are constant. only_host >= 0: only the points hosted in that frame. Jacobians of the
+  // frames `prior` holds are taken at its linearization point.
   void accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
                   const std::vector<double>& rho, const std::vector<HostPattern>& gw,
-                  const std::vector<int>& slot, int dim, NormalEquations& ne, int only_host = -1) const;
+                  const std::vector<int>& slot, int dim, NormalEquations& ne, const BaPrior* prior,
+                  int only_host = -1) const;
 
   CameraModel cam_;
   BaConfig cfg_;
