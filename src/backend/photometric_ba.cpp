@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
 
 #include "frontend/frame_tracker.hpp"  // sampleBilinear
@@ -60,7 +61,6 @@ struct LinearizationState {
 namespace {
 std::vector<BaFrame> linearizationFrames(const std::vector<BaFrame>& frames, const BaPrior* prior) {
   std::vector<BaFrame> lin = frames;
-  if (!prior) return lin;
   for (std::size_t i = 0; i < prior->frames.size(); ++i) {
     BaFrame& f = lin[prior->frames[i]];
     f.T_w_c = prior->T0[i], f.a = prior->a0[i], f.b = prior->b0[i];
@@ -334,9 +334,12 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
                                const BaPrior* prior, int only_host) const {
   const double d = cfg_.huber;
   const PairTransforms pairs(frames);
-  const std::vector<BaFrame> lin_frames = linearizationFrames(frames, prior);
-  const PairTransforms lin_pairs(lin_frames);
-  const LinearizationState lin{&lin_frames, &lin_pairs};
+  // Without a prior every Jacobian is taken at the current state (lin stays null).
+  const bool fej = prior && !prior->empty();
+  const std::vector<BaFrame> lin_frames = fej ? linearizationFrames(frames, prior) : std::vector<BaFrame>{};
+  const std::optional<PairTransforms> lin_pairs =
+      fej ? std::optional<PairTransforms>(lin_frames) : std::nullopt;
+  const LinearizationState lin{&lin_frames, fej ? &*lin_pairs : nullptr};
   const auto np = static_cast<Eigen::Index>(points.size());
   ne.Hff = Eigen::MatrixXd::Zero(dim, dim);
   ne.bf = Eigen::VectorXd::Zero(dim);
@@ -355,7 +358,9 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
       ne.bp[i] += p.prior_weight * (rho[i] - p.prior_inv_depth);
     }
     for (int t : p.targets) {
-      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data(), &lin)) continue;
+      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data(),
+                        fej ? &lin : nullptr))
+        continue;
       const int sh = slot[p.host], st = slot[t];
       for (int k = 0; k < 8; ++k) {
         const double a = std::abs(r[k]);

@@ -108,10 +108,7 @@ std::optional<SE3> EventFrontend::trackBetween(const EventFrame& ef, TimeNs t_a,
   motion.T_ef_kf = T_w_pred.inverse() * T_w_kf_;
   const MotionPriorConfig& mc = cfg_.motion_prior;
   // Both ends are measured: the interpolation's own error is the acceleration's, largest midway.
-  const double dt2 = s * (1 - s) * span * span;
-  const double st = median_depth_ * (mc.sigma_translation + 0.5 * mc.accel * dt2);
-  const double sr = mc.sigma_rotation + 0.5 * mc.ang_accel * dt2;
-  motion.sigma << st, st, st, sr, sr, sr;
+  motion.sigma = priorSigma(std::sqrt(s * (1 - s)) * span, 1.0);
   corrected_ = false;
   // Frames farther apart than max_gap_s say too little about the motion in between (as in track()).
   const bool use_motion = mc.enabled && span <= mc.max_gap_s;

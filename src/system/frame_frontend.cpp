@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "mapping/depth_fill.hpp"
 #include "system/run_stats.hpp"
 
 namespace eds {
@@ -144,17 +145,16 @@ void FrameFrontend::setPending(const SE3& T_w_new, double a) {
   pending_.points.clear();
   // The reference's points that the new keyframe sees, in its pixels (a stand-in for its own points,
   // which the back-end is still mapping).
-  const SE3 T_new_kf = T_w_new.inverse() * T_w_kf_;
-  for (const KeyframePoint& p : ref_.points) {
-    if (!(p.inv_depth > 0)) continue;
-    const Vec3 X = T_new_kf * (Vec3((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0) / p.inv_depth);
-    if (X.z() <= 1e-9) continue;
-    KeyframePoint q;
-    q.u = static_cast<float>(cam_.fx * X.x() / X.z() + cam_.cx);
-    q.v = static_cast<float>(cam_.fy * X.y() / X.z() + cam_.cy);
-    if (q.u < 0 || q.v < 0 || q.u > cam_.width - 1 || q.v > cam_.height - 1) continue;
-    q.inv_depth = 1.0 / X.z();
-    pending_.points.push_back(q);
+  std::vector<Vec3> p_w;
+  p_w.reserve(ref_.points.size());
+  for (const KeyframePoint& p : ref_.points)
+    if (p.inv_depth > 0)
+      p_w.push_back(T_w_kf_ *
+                    (Vec3((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0) / p.inv_depth));
+  for (const ProjectedPoint& q : projectPoints(p_w, T_w_new, cam_)) {
+    KeyframePoint kp;
+    kp.u = q.u, kp.v = q.v, kp.inv_depth = q.inv_depth;
+    pending_.points.push_back(kp);
   }
 }
 

@@ -38,6 +38,16 @@ Scene& scene() {
   return s;
 }
 
+// The first F frames with their images at their true poses.
+std::vector<BaFrame> framesAtTruth(const Scene& s, int F) {
+  std::vector<BaFrame> frames(F);
+  for (int f = 0; f < F; ++f) {
+    frames[f].image = s.frames.images[f];
+    frames[f].T_w_c = s.motion.pose(s.frames.times[f]);
+  }
+  return frames;
+}
+
 std::vector<BaPoint> pointsOf(const Scene& s, int host, double depth_noise, std::mt19937& rng, int F) {
   Keyframe kf;
   setKeyframeImage(kf, s.frames.images[host]);
@@ -182,10 +192,8 @@ TEST(PhotometricBA, MarginalizationPriorReproducesTheJointStep) {
   ASSERT_GE(static_cast<int>(s.frames.images.size()), F);
   std::mt19937 rng(3);
   std::normal_distribution<double> n(0.0, 1.0);
-  std::vector<BaFrame> frames(F);
+  std::vector<BaFrame> frames = framesAtTruth(s, F);
   for (int f = 0; f < F; ++f) {
-    frames[f].image = s.frames.images[f];
-    frames[f].T_w_c = s.motion.pose(s.frames.times[f]);
     Vec6 xi;
     for (int k = 0; k < 3; ++k) xi[k] = 0.002 * n(rng), xi[k + 3] = 0.001 * n(rng);
     // Gauge and scale: frames 1 and 2 are held (with one, the scale direction would be a null space
@@ -247,11 +255,7 @@ TEST(PhotometricBA, MarginalizationPriorKeepsTheGaugeFree) {
   ASSERT_GE(static_cast<int>(s.frames.images.size()), F);
   std::mt19937 rng(4);
   std::normal_distribution<double> n(0.0, 1.0);
-  std::vector<BaFrame> frames(F);
-  for (int f = 0; f < F; ++f) {
-    frames[f].image = s.frames.images[f];
-    frames[f].T_w_c = s.motion.pose(s.frames.times[f]);
-  }
+  std::vector<BaFrame> frames = framesAtTruth(s, F);
   std::vector<BaPoint> pts;
   for (int host : {0, 1, 2}) {
     const std::vector<BaPoint> p = pointsOf(s, host, 0.02, rng, F);
