@@ -29,6 +29,12 @@ EventFrameBuilder::EventFrameBuilder(const Undistorter& undistorter, EventFrameC
     weights_[k] = static_cast<float>(std::exp(-0.5 * z * z));
   }
   acc_.create(und_.pinhole().height, und_.pinhole().width, CV_32F);
+  if (cfg_.reversal_compensation) {
+    const std::size_t raw_pixels = static_cast<std::size_t>(und_.raw().width) * und_.raw().height;
+    last_index_.assign(raw_pixels, 0);
+    last_polarity_.assign(raw_pixels, 0);
+    stamp_.assign(raw_pixels, 0);
+  }
 }
 
 void EventFrameBuilder::build(const EventArray& events, std::size_t begin, EventFrame& out) {
@@ -38,22 +44,50 @@ void EventFrameBuilder::build(const EventArray& events, std::size_t begin, Event
   acc_.setTo(0.0f);
   float* a = acc_.ptr<float>(0);
   const int raw_w = und_.raw().width, raw_h = und_.raw().height;
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t i = begin + k;
-    const int xr = events.x[i], yr = events.y[i];
-    if (xr >= raw_w || yr >= raw_h) continue;
-    const cv::Point2f u = und_.eventLut(xr, yr);
+  auto vote = [&](const cv::Point2f& u, float v) {
     const float fx = std::floor(u.x), fy = std::floor(u.y);
     const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-    if (x0 < 0 || y0 < 0 || x0 + 1 >= W || y0 + 1 >= H) continue;
+    if (x0 < 0 || y0 < 0 || x0 + 1 >= W || y0 + 1 >= H) return;
     const float ax = u.x - fx, ay = u.y - fy;
-    const float v = weights_[k] * static_cast<float>(events.p[i]);
     float* r0 = a + y0 * W + x0;
     float* r1 = r0 + W;
     r0[0] += v * (1 - ax) * (1 - ay);
     r0[1] += v * ax * (1 - ay);
     r1[0] += v * (1 - ax) * ay;
     r1[1] += v * ax * ay;
+  };
+  const bool compensate = cfg_.reversal_compensation;
+  if (compensate) {
+    if (++generation_ == 0) {  // wrapped: old stamps could alias
+      std::fill(stamp_.begin(), stamp_.end(), 0u);
+      generation_ = 1;
+    }
+    // The pixels' last events before the packet: up to N events back, where the array still has them.
+    for (std::size_t i = begin - std::min(begin, n); i < begin; ++i) {
+      const int xr = events.x[i], yr = events.y[i];
+      if (xr >= raw_w || yr >= raw_h) continue;
+      const std::size_t px = static_cast<std::size_t>(yr) * raw_w + xr;
+      last_index_[px] = static_cast<std::int64_t>(i);
+      last_polarity_[px] = events.p[i];
+      stamp_[px] = generation_;
+    }
+  }
+  const auto b = static_cast<std::int64_t>(begin);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = begin + k;
+    const int xr = events.x[i], yr = events.y[i];
+    if (xr >= raw_w || yr >= raw_h) continue;
+    const cv::Point2f u = und_.eventLut(xr, yr);
+    vote(u, weights_[k] * static_cast<float>(events.p[i]));
+    if (!compensate) continue;
+    const std::size_t px = static_cast<std::size_t>(yr) * raw_w + xr;
+    if (stamp_[px] == generation_ && last_polarity_[px] != events.p[i]) {
+      const std::int64_t mid = (last_index_[px] + static_cast<std::int64_t>(i)) / 2 - b;
+      if (mid >= 0) vote(u, weights_[static_cast<std::size_t>(mid)] * static_cast<float>(events.p[i]));
+    }
+    last_index_[px] = static_cast<std::int64_t>(i);
+    last_polarity_[px] = events.p[i];
+    stamp_[px] = generation_;
   }
   if (cfg_.blur)
     cv::GaussianBlur(acc_, out.delta, cv::Size(3, 3), 0, 0, cv::BORDER_REPLICATE);

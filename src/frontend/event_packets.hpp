@@ -1,6 +1,7 @@
 #pragma once
 // Packets of N events every `stride` events from a streaming source (event frames with overlap),
 // keeping only a bounded window of events in memory.
+#include <algorithm>
 #include <cstddef>
 
 #include "core/events.hpp"
@@ -25,12 +26,13 @@ class EventPacketStream {
 
  private:
   void compact() {
-    const auto d = static_cast<std::ptrdiff_t>(pos_);
+    // Keeps N events before the next packet: the builder looks back at them (reversal_compensation).
+    const auto d = static_cast<std::ptrdiff_t>(pos_ - std::min(pos_, n_));
     buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
     buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
     buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
     buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
-    pos_ = 0;
+    pos_ -= static_cast<std::size_t>(d);
   }
   EventSource& src_;
   std::size_t n_, stride_, pos_ = 0;

@@ -70,6 +70,38 @@ TEST(EventFrame, GaussianWeightsBilinearVotesMedianTimeUnitNorm) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
+TEST(EventFrame, ReversalCompensationAddsTheEventTheHysteresisHeldBack) {
+  // Pixel A fires + + then - -: its first "-" comes a full threshold below the last level, one event
+  // late; the builder adds it back at the index midway between A's last "+" and that "-". Pixel B
+  // never reverses and is left alone. Pixel C's last event before the packet (index 1) counts too.
+  const Undistorter und(pinhole240());
+  EventFrameConfig cfg;
+  cfg.num_events = 7;
+  cfg.blur = false;
+  EventArray ev;
+  auto add = [&](std::uint16_t x, int p) {
+    ev.push_back(1000 + 10 * static_cast<TimeNs>(ev.size()), x, 60, p);
+  };
+  add(90, 1), add(70, 1), add(91, 1);  // 0-2: before the packet
+  add(50, 1), add(50, 1), add(60, 1), add(50, -1), add(60, 1), add(50, -1), add(70, -1);  // 3-9
+  auto w = [&](int k) { return std::exp(-0.5 * std::pow((k - 3.0) / (7.0 / 6.0), 2)); };
+  EventFrame on, off;
+  cfg.reversal_compensation = true;
+  EventFrameBuilder(und, cfg).build(ev, 3, on);
+  cfg.reversal_compensation = false;
+  EventFrameBuilder(und, cfg).build(ev, 3, off);
+  const double b = w(2) + w(4);  // pixel B (x = 60), packet indices 2 and 4
+  // Without compensation A = w0 + w1 - w3 - w5.
+  EXPECT_NEAR(off.delta.at<float>(60, 50) / off.delta.at<float>(60, 60), (w(0) + w(1) - w(3) - w(5)) / b,
+              1e-5);
+  // With it, A's first "-" (packet index 3, last "+" at 1) adds -w(2); its second "-" adds nothing.
+  EXPECT_NEAR(on.delta.at<float>(60, 50) / on.delta.at<float>(60, 60), (w(0) + w(1) - w(3) - w(5) - w(2)) / b,
+              1e-5);
+  // C: "+" at array index 1, "-" at 9 (packet index 6): the midway index 5 is packet index 2.
+  EXPECT_NEAR(on.delta.at<float>(60, 70) / on.delta.at<float>(60, 60), -(w(6) + w(2)) / b, 1e-5);
+  EXPECT_NEAR(off.delta.at<float>(60, 70) / off.delta.at<float>(60, 60), -w(6) / b, 1e-5);
+}
+
 Keyframe syntheticKeyframe(const CameraModel& cam, int n, unsigned seed) {
   Keyframe kf;
   std::mt19937 rng(seed);
