@@ -60,8 +60,9 @@ void runRun(RunArgs& a) {
               r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
   if (cfg.use_events)
     std::printf("%zu of %zu event frames tracked (event-rate poses)\n", r.events_tracked, r.event_frames);
-  std::printf("wrote %s/{%strajectory_frames.txt, keyframes.txt, map.ply, summary.json, config_used.yaml}\n",
-              a.out.c_str(), cfg.use_events ? "trajectory_events.txt, " : "");
+  std::printf(
+      "wrote %s/{%strajectory_frames[_live].txt, keyframes.txt, map.ply, summary.json, config_used.yaml}\n",
+      a.out.c_str(), cfg.use_events ? "trajectory_events[_live].txt, " : "");
 }
 
 }  // namespace

@@ -74,6 +74,7 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
     T_ef_kf_ = SE3();
   }
   T_w_kf_ = T_w_kf;
+  ref_id_ = ref.id;
   tracker_.setKeyframe(kf);
   t_prev_ = -1;
   has_ref_ = true;

@@ -45,6 +45,9 @@ class EventFrontend {
   // A new reference: keyframe intensity image and points with inverse depths, and its pose.
   void setReference(const Keyframe& ref, const SE3& T_w_kf);
   bool hasReference() const { return has_ref_; }
+  // The reference keyframe's id and the pose the event poses are composed with (T_w_ef = T_w_kf·T_kf_ef).
+  int referenceId() const { return ref_id_; }
+  const SE3& T_w_kf() const { return T_w_kf_; }
   // Tracks an event frame from the prior (if given) or a constant-velocity prediction. The pose
   // (T_w_ef), or nullopt when the frame cannot be tracked (the estimate then stays as it was).
   std::optional<SE3> track(const EventFrame& ef, const SE3* prior, std::string* failure = nullptr);
@@ -64,6 +67,7 @@ class EventFrontend {
   EventFrontendConfig cfg_;
   EventTracker tracker_;
   bool has_ref_ = false;
+  int ref_id_ = -1;
   SE3 T_w_kf_;
   SE3 T_ef_kf_, T_prev_;  // current estimate and the one before (constant-velocity prediction)
   Vec6 nu_ = Vec6::Zero();

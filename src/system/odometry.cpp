@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
@@ -27,6 +28,23 @@ double peakRssMb() {
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   return ru.ru_maxrss / 1024.0;  // kB on Linux
+}
+
+// Each pose through its keyframe's final pose, and a keyframe's own frame at its final pose; a pose
+// without a keyframe (or whose keyframe the window never retired) stays as tracked.
+Trajectory refinedTrajectory(const Trajectory& traj, const std::vector<PoseAnchor>& anchors,
+                             const std::vector<RetiredKeyframe>& keyframes) {
+  std::unordered_map<int, const SE3*> by_id;
+  std::unordered_map<TimeNs, const SE3*> by_time;
+  for (const RetiredKeyframe& k : keyframes) by_id.emplace(k.id, &k.T_w_kf), by_time.emplace(k.t, &k.T_w_kf);
+  Trajectory out = traj;
+  for (std::size_t i = 0; i < out.size() && i < anchors.size(); ++i) {
+    if (const auto own = by_time.find(out[i].t); own != by_time.end())
+      out[i].T_w_c = *own->second;
+    else if (const auto kf = by_id.find(anchors[i].kf_id); kf != by_id.end())
+      out[i].T_w_c = *kf->second * anchors[i].T_kf_c;
+  }
+  return out;
 }
 
 }  // namespace
@@ -88,6 +106,7 @@ class Runner {
     const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
     const SE3 T_w_f = odo_.track(t, img, prior ? &last_event_.T_w_c : nullptr);
     res_.frames.push_back({t, T_w_f});
+    res_.frame_anchors.push_back({odo_.referenceId(), odo_.T_w_kf().inverse() * T_w_f});
     if (odo_.lastTrackOk()) events_.correct(t, T_w_f);
     syncReference();
   }
@@ -126,12 +145,17 @@ class Runner {
     const BootstrapFrame& last = boot_.frames().back();
     Trajectory boot_traj;
     for (const BootstrapFrame& f : boot_.frames()) boot_traj.push_back({f.t, f.T_ref_c});
-    for (std::size_t k = 0; k + 1 < boot_traj.size(); ++k) res_.frames.push_back(boot_traj[k]);
+    // The bootstrap's poses are relative to its reference, keyframe 0 (at the identity).
+    for (std::size_t k = 0; k + 1 < boot_traj.size(); ++k) {
+      res_.frames.push_back(boot_traj[k]);
+      res_.frame_anchors.push_back({0, boot_traj[k].T_w_c});
+    }
     odo_.setLast(boot_traj[boot_traj.size() - 2].T_w_c);
     odo_.setLastBrightness(last.a, last.b);
     const SE3 T_w_f = odo_.addKeyframe(t, img, last.T_ref_c, last.a, last.b);
     odo_.setLast(T_w_f);
     res_.frames.push_back({t, T_w_f});
+    res_.frame_anchors.push_back({0, T_w_f});
     res_.tracked += boot_traj.size();
     if (!cfg_.use_events) return;
     // The event frames that arrived during the bootstrap, against the bootstrap's reference keyframe
@@ -212,6 +236,7 @@ class Runner {
     last_event_ = {ef.t, *T};
     has_event_pose_ = true;
     res_.events.push_back(last_event_);
+    res_.event_anchors.push_back({events_.referenceId(), events_.T_w_kf().inverse() * *T});
   }
 
   const Sequence& seq_;
@@ -301,6 +326,8 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
   std::sort(res.keyframes.begin(), res.keyframes.end(),
             [](const auto& a, const auto& b) { return a.t < b.t; });
   res.map = window.retiredPoints();
+  res.frames_refined = refinedTrajectory(res.frames, res.frame_anchors, window.retiredKeyframes());
+  res.events_refined = refinedTrajectory(res.events, res.event_anchors, window.retiredKeyframes());
   res.sequence_s = toSeconds(last_t - res.first_t);
   res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();
   res.peak_rss_mb = peakRssMb();
@@ -310,8 +337,14 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
 void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
                           const OdometryConfig& cfg) {
   std::filesystem::create_directories(dir);
-  writeTum(dir / "trajectory_frames.txt", r.frames);
-  if (cfg.use_events) writeTum(dir / "trajectory_events.txt", r.events);
+  // The main files hold each pose through its keyframe's final pose (as DSO's results); *_live.txt the
+  // poses as they were tracked, what a live user had at the time.
+  writeTum(dir / "trajectory_frames.txt", r.frames_refined);
+  writeTum(dir / "trajectory_frames_live.txt", r.frames);
+  if (cfg.use_events) {
+    writeTum(dir / "trajectory_events.txt", r.events_refined);
+    writeTum(dir / "trajectory_events_live.txt", r.events);
+  }
   writeTum(dir / "keyframes.txt", r.keyframes);
   PointCloud pc;
   for (const MapPoint& p : r.map) {

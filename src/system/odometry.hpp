@@ -77,9 +77,20 @@ struct OdometryFailure {
   std::string reason;
 };
 
+// The keyframe a pose was tracked against (-1: none) and the pose relative to it.
+struct PoseAnchor {
+  int kf_id = -1;
+  SE3 T_kf_c;
+};
+
 struct OdometryResult {
-  Trajectory frames;  // one pose per frame from the bootstrap's reference on (T_w_c)
-  Trajectory events;  // one pose per tracked event frame (T_w_ef), events mode
+  Trajectory frames;  // one pose per frame from the bootstrap's reference on (T_w_c), as tracked
+  Trajectory events;  // one pose per tracked event frame (T_w_ef), events mode, as tracked
+  // Parallel to frames / events. The back-end keeps refining a keyframe after the trackers used it;
+  // composed with the keyframes' final poses, the anchors give the refined trajectories (as DSO
+  // writes its frames' poses: through their tracking reference's final pose).
+  std::vector<PoseAnchor> frame_anchors, event_anchors;
+  Trajectory frames_refined, events_refined;
   std::size_t event_frames = 0, events_tracked = 0;
   std::vector<double> event_track_ms;
   Trajectory keyframes;  // final (optimized) keyframe poses
@@ -107,7 +118,8 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
 std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, double start_s, double duration_s,
                                       double frame_rate);
 
-// trajectory_frames.txt, keyframes.txt, map.ply, summary.json.
+// trajectory_frames.txt (refined) and trajectory_frames_live.txt (as tracked), the same for events,
+// keyframes.txt, map.ply, summary.json.
 void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
                           const OdometryConfig& cfg);
 
