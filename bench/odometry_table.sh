@@ -2,7 +2,8 @@
 # Whole-run benchmark of `eds run`: accuracy (sim3 ATE, rotation RMSE, coverage) and real-time factor on
 # the shared ESIM and ECD sequences and on simulated room/desk sequences (the first 8 s of the real
 # poster_6dof motion, smoothed, sigma_C = 0.03, background noise), events + frames and frames only,
-# at several frame rates. Prints a markdown table; the real-time factor is the median of RUNS runs.
+# at several frame rates, on the trajectories eds run writes (refined through the final keyframe poses).
+# Prints a markdown table; the real-time factor is the median of RUNS runs.
 # Usage: bench/odometry_table.sh [OUT_DIR]   (RUNS=3 by default; needs build/release and ../shared/data)
 set -euo pipefail
 cd "$(dirname "$0")/.."
