@@ -57,20 +57,20 @@ void EventFrameBuilder::build(const EventArray& events, std::size_t begin, Event
     r1[1] += v * ax * ay;
   };
   const bool compensate = cfg_.reversal_compensation;
+  auto rawPixel = [&](std::size_t i) { return static_cast<std::size_t>(events.y[i]) * raw_w + events.x[i]; };
+  auto remember = [&](std::size_t px, std::size_t i) {
+    last_index_[px] = static_cast<std::int64_t>(i);
+    last_polarity_[px] = events.p[i];
+    stamp_[px] = generation_;
+  };
   if (compensate) {
     if (++generation_ == 0) {  // wrapped: old stamps could alias
       std::fill(stamp_.begin(), stamp_.end(), 0u);
       generation_ = 1;
     }
     // The pixels' last events before the packet: up to N events back, where the array still has them.
-    for (std::size_t i = begin - std::min(begin, n); i < begin; ++i) {
-      const int xr = events.x[i], yr = events.y[i];
-      if (xr >= raw_w || yr >= raw_h) continue;
-      const std::size_t px = static_cast<std::size_t>(yr) * raw_w + xr;
-      last_index_[px] = static_cast<std::int64_t>(i);
-      last_polarity_[px] = events.p[i];
-      stamp_[px] = generation_;
-    }
+    for (std::size_t i = begin - std::min(begin, n); i < begin; ++i)
+      if (events.x[i] < raw_w && events.y[i] < raw_h) remember(rawPixel(i), i);
   }
   const auto b = static_cast<std::int64_t>(begin);
   for (std::size_t k = 0; k < n; ++k) {
@@ -80,14 +80,12 @@ void EventFrameBuilder::build(const EventArray& events, std::size_t begin, Event
     const cv::Point2f u = und_.eventLut(xr, yr);
     vote(u, weights_[k] * static_cast<float>(events.p[i]));
     if (!compensate) continue;
-    const std::size_t px = static_cast<std::size_t>(yr) * raw_w + xr;
+    const std::size_t px = rawPixel(i);
     if (stamp_[px] == generation_ && last_polarity_[px] != events.p[i]) {
       const std::int64_t mid = (last_index_[px] + static_cast<std::int64_t>(i)) / 2 - b;
       if (mid >= 0) vote(u, weights_[static_cast<std::size_t>(mid)] * static_cast<float>(events.p[i]));
     }
-    last_index_[px] = static_cast<std::int64_t>(i);
-    last_polarity_[px] = events.p[i];
-    stamp_[px] = generation_;
+    remember(px, i);
   }
   if (cfg_.blur)
     cv::GaussianBlur(acc_, out.delta, cv::Size(3, 3), 0, 0, cv::BORDER_REPLICATE);
