@@ -1,5 +1,7 @@
 #include "backend/photometric_ba.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Cholesky>
 #include <array>
 #include <cmath>
@@ -18,6 +20,15 @@ constexpr int kFrameParams = 8;  // pose (6), a, b
 double huberCost(double r, double d) {
   const double a = std::abs(r);
   return a <= d ? 0.5 * r * r : d * (a - 0.5 * d);
+}
+
+// The points are processed in a fixed number of chunks, in parallel, and the chunks' sums are added
+// in chunk order: the result does not depend on the number of threads or their scheduling, so runs
+// are reproducible.
+constexpr int kChunks = 16;
+template <typename F>
+void forEachChunk(std::size_t n, F&& f) {
+  tbb::parallel_for(0, kChunks, [&](int c) { f(c, n * c / kChunks, n * (c + 1) / kChunks); });
 }
 }  // namespace
 
@@ -131,30 +142,6 @@ bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& 
   return evaluateCore(frames, PairTransforms(frames), p.host, p.u, p.v, p.inv_depth, target, r, J);
 }
 
-Eigen::VectorXd BaPrior::delta(const std::vector<BaFrame>& fr) const {
-  Eigen::VectorXd x(8 * frames.size());
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const BaFrame& f = fr.at(frames[i]);
-    x.segment<6>(8 * i) = (f.T_w_c * T0[i].inverse()).log();
-    x[8 * i + 6] = f.a - a0[i];
-    x[8 * i + 7] = f.b - b0[i];
-  }
-  return x;
-}
-
-double BaPrior::energy(const std::vector<BaFrame>& fr) const {
-  if (empty()) return 0.0;
-  const Eigen::VectorXd x = delta(fr);
-  return b.dot(x) + 0.5 * x.dot(H * x);
-}
-
-void BaPrior::eraseFrameIndex(int removed) {
-  for (int& f : frames) {
-    if (f == removed) throw std::logic_error("BaPrior: erasing a frame the prior still holds");
-    if (f > removed) --f;
-  }
-}
-
 // Normal equations of the photometric terms with the points kept apart (one inverse depth each), so
 // that they can be eliminated by the Schur complement. Hfp holds one column per point.
 struct NormalEquations {
@@ -170,18 +157,20 @@ std::vector<HostPattern> PhotometricBA::hostPatterns(const std::vector<BaFrame>&
   // small geometric errors make large photometric ones there.
   const double c2 = cfg_.grad_weight_c * cfg_.grad_weight_c;
   std::vector<HostPattern> w(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const BaPoint& p = points[i];
-    const cv::Mat& img = frames[p.host].image;
-    for (int k = 0; k < 8; ++k) {
-      const double uk = p.u + kPattern[k][0], vk = p.v + kPattern[k][1];
-      double gx = 0, gy = 0, I = 0;
-      if (uk >= 0 && vk >= 0 && uk < img.cols - 1 && vk < img.rows - 1)
-        I = sampleBilinear(img, uk, vk, gx, gy);
-      w[i].w[k] = c2 / (c2 + gx * gx + gy * gy);
-      w[i].I[k] = I;
+  forEachChunk(points.size(), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const BaPoint& p = points[i];
+      const cv::Mat& img = frames[p.host].image;
+      for (int k = 0; k < 8; ++k) {
+        const double uk = p.u + kPattern[k][0], vk = p.v + kPattern[k][1];
+        double gx = 0, gy = 0, I = 0;
+        if (uk >= 0 && vk >= 0 && uk < img.cols - 1 && vk < img.rows - 1)
+          I = sampleBilinear(img, uk, vk, gx, gy);
+        w[i].w[k] = c2 / (c2 + gx * gx + gy * gy);
+        w[i].I[k] = I;
+      }
     }
-  }
+  });
   return w;
 }
 
@@ -190,25 +179,34 @@ double PhotometricBA::cost(const std::vector<BaFrame>& frames, const std::vector
                            const BaPrior* prior, double* rmse, int* count) const {
   const PairTransforms pairs(frames);
   const double d = cfg_.huber;
-  double c = 0, ss = 0;
-  int n = 0;
-  Eigen::Matrix<double, 8, 1> r;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const BaPoint& p = points[i];
-    if (p.outlier) continue;
-    if (p.prior_weight > 0) {
-      const double e = rho[i] - p.prior_inv_depth;
-      c += 0.5 * p.prior_weight * e * e;
-    }
-    for (int t : p.targets) {
-      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, nullptr, gw[i].I.data())) continue;
-      for (int k = 0; k < 8; ++k) {
-        c += gw[i].w[k] * huberCost(r[k], d);
-        ss += r[k] * r[k];
-        ++n;
+  struct Sums {
+    double c = 0, ss = 0;
+    int n = 0;
+  };
+  std::array<Sums, kChunks> part{};
+  forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
+    Sums& s = part[chunk];
+    Eigen::Matrix<double, 8, 1> r;
+    for (std::size_t i = begin; i < end; ++i) {
+      const BaPoint& p = points[i];
+      if (p.outlier) continue;
+      if (p.prior_weight > 0) {
+        const double e = rho[i] - p.prior_inv_depth;
+        s.c += 0.5 * p.prior_weight * e * e;
+      }
+      for (int t : p.targets) {
+        if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, nullptr, gw[i].I.data())) continue;
+        for (int k = 0; k < 8; ++k) {
+          s.c += gw[i].w[k] * huberCost(r[k], d);
+          s.ss += r[k] * r[k];
+          ++s.n;
+        }
       }
     }
-  }
+  });
+  double c = 0, ss = 0;
+  int n = 0;
+  for (const Sums& s : part) c += s.c, ss += s.ss, n += s.n;
   if (prior) c += prior->energy(frames);
   if (rmse) *rmse = n ? std::sqrt(ss / n) : 0.0;
   if (count) *count = n;
@@ -309,21 +307,26 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   }
   for (std::size_t i = 0; i < np; ++i) points[i].inv_depth = rho[i];
   // Outliers: observations whose pattern does not match any more (occlusion, wrong depth).
-  Eigen::Matrix<double, 8, 1> r;
   const PairTransforms pairs(frames);
-  for (BaPoint& p : points) {
-    if (p.outlier) continue;
-    std::size_t keep = 0;
-    for (int t : p.targets) {
-      if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr) &&
-          std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
-        p.targets[keep++] = t;
-      else
-        ++stats.outliers_removed;
+  std::array<int, kChunks> removed{};
+  forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
+    Eigen::Matrix<double, 8, 1> r;
+    for (std::size_t i = begin; i < end; ++i) {
+      BaPoint& p = points[i];
+      if (p.outlier) continue;
+      std::size_t keep = 0;
+      for (int t : p.targets) {
+        if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr) &&
+            std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
+          p.targets[keep++] = t;
+        else
+          ++removed[chunk];
+      }
+      p.targets.resize(keep);
+      if (p.targets.empty()) p.outlier = true;
     }
-    p.targets.resize(keep);
-    if (p.targets.empty()) p.outlier = true;
-  }
+  });
+  for (int k : removed) stats.outliers_removed += k;
   cost(frames, points, rho, gw, nullptr, &stats.final_rmse, &stats.residuals);
   return stats;
 }
@@ -346,50 +349,63 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
   ne.Hpp.assign(points.size(), 0.0);
   ne.bp.assign(points.size(), 0.0);
   ne.Hfp.setZero(dim, np);
-  Eigen::Matrix<double, 8, 1> r;
-  Eigen::Matrix<double, 8, 17> J;
-  Eigen::Matrix<double, 8, 8> Jh, Jt;
-  Eigen::Matrix<double, 8, 1> w, Jr;
-  for (Eigen::Index i = 0; i < np; ++i) {
-    const BaPoint& p = points[i];
-    if (p.outlier || (only_host >= 0 && p.host != only_host)) continue;
-    if (p.prior_weight > 0) {
-      ne.Hpp[i] += p.prior_weight;
-      ne.bp[i] += p.prior_weight * (rho[i] - p.prior_inv_depth);
+  // Per chunk: its own frame blocks (summed below in chunk order); the point columns are disjoint.
+  std::vector<Eigen::MatrixXd> Hc(kChunks);
+  std::vector<Eigen::VectorXd> bc(kChunks);
+  forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
+    Eigen::MatrixXd& Hff = Hc[chunk];
+    Eigen::VectorXd& bf = bc[chunk];
+    Hff.setZero(dim, dim);
+    bf.setZero(dim);
+    Eigen::Matrix<double, 8, 1> r;
+    Eigen::Matrix<double, 8, 17> J;
+    Eigen::Matrix<double, 8, 8> Jh, Jt;
+    Eigen::Matrix<double, 8, 1> w, Jr;
+    for (auto i = static_cast<Eigen::Index>(begin); i < static_cast<Eigen::Index>(end); ++i) {
+      const BaPoint& p = points[i];
+      if (p.outlier || (only_host >= 0 && p.host != only_host)) continue;
+      if (p.prior_weight > 0) {
+        ne.Hpp[i] += p.prior_weight;
+        ne.bp[i] += p.prior_weight * (rho[i] - p.prior_inv_depth);
+      }
+      for (int t : p.targets) {
+        if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data(),
+                          fej ? &lin : nullptr))
+          continue;
+        const int sh = slot[p.host], st = slot[t];
+        for (int k = 0; k < 8; ++k) {
+          const double a = std::abs(r[k]);
+          w[k] = gw[i].w[k] * (a <= d ? 1.0 : d / a);
+        }
+        // The 8 pattern rows at once: J^T W J blocks as small matrix products.
+        Jh = J.leftCols<8>();
+        Jt = J.middleCols<8>(8);
+        Jr = J.col(16);
+        const Eigen::Matrix<double, 8, 8> WJh = w.asDiagonal() * Jh, WJt = w.asDiagonal() * Jt;
+        const Eigen::Matrix<double, 8, 1> Wr = w.cwiseProduct(r), WJr = w.cwiseProduct(Jr);
+        if (sh >= 0) {
+          Hff.block<8, 8>(sh * 8, sh * 8).noalias() += Jh.transpose() * WJh;
+          bf.segment<8>(sh * 8).noalias() += Jh.transpose() * Wr;
+          ne.Hfp.col(i).segment<8>(sh * 8).noalias() += Jh.transpose() * WJr;
+        }
+        if (st >= 0) {
+          Hff.block<8, 8>(st * 8, st * 8).noalias() += Jt.transpose() * WJt;
+          bf.segment<8>(st * 8).noalias() += Jt.transpose() * Wr;
+          ne.Hfp.col(i).segment<8>(st * 8).noalias() += Jt.transpose() * WJr;
+        }
+        if (sh >= 0 && st >= 0) {
+          const Eigen::Matrix<double, 8, 8> Hht = Jh.transpose() * WJt;
+          Hff.block<8, 8>(sh * 8, st * 8) += Hht;
+          Hff.block<8, 8>(st * 8, sh * 8) += Hht.transpose();
+        }
+        ne.Hpp[i] += Jr.dot(WJr);
+        ne.bp[i] += Jr.dot(Wr);
+      }
     }
-    for (int t : p.targets) {
-      if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data(),
-                        fej ? &lin : nullptr))
-        continue;
-      const int sh = slot[p.host], st = slot[t];
-      for (int k = 0; k < 8; ++k) {
-        const double a = std::abs(r[k]);
-        w[k] = gw[i].w[k] * (a <= d ? 1.0 : d / a);
-      }
-      // The 8 pattern rows at once: J^T W J blocks as small matrix products.
-      Jh = J.leftCols<8>();
-      Jt = J.middleCols<8>(8);
-      Jr = J.col(16);
-      const Eigen::Matrix<double, 8, 8> WJh = w.asDiagonal() * Jh, WJt = w.asDiagonal() * Jt;
-      const Eigen::Matrix<double, 8, 1> Wr = w.cwiseProduct(r), WJr = w.cwiseProduct(Jr);
-      if (sh >= 0) {
-        ne.Hff.block<8, 8>(sh * 8, sh * 8).noalias() += Jh.transpose() * WJh;
-        ne.bf.segment<8>(sh * 8).noalias() += Jh.transpose() * Wr;
-        ne.Hfp.col(i).segment<8>(sh * 8).noalias() += Jh.transpose() * WJr;
-      }
-      if (st >= 0) {
-        ne.Hff.block<8, 8>(st * 8, st * 8).noalias() += Jt.transpose() * WJt;
-        ne.bf.segment<8>(st * 8).noalias() += Jt.transpose() * Wr;
-        ne.Hfp.col(i).segment<8>(st * 8).noalias() += Jt.transpose() * WJr;
-      }
-      if (sh >= 0 && st >= 0) {
-        const Eigen::Matrix<double, 8, 8> Hht = Jh.transpose() * WJt;
-        ne.Hff.block<8, 8>(sh * 8, st * 8) += Hht;
-        ne.Hff.block<8, 8>(st * 8, sh * 8) += Hht.transpose();
-      }
-      ne.Hpp[i] += Jr.dot(WJr);
-      ne.bp[i] += Jr.dot(Wr);
-    }
+  });
+  for (int c = 0; c < kChunks; ++c) {
+    ne.Hff += Hc[c];
+    ne.bf += bc[c];
   }
 }
 

@@ -5,7 +5,9 @@
 //     r = I_t(π(T_t_h π⁻¹(u_k, ρ))) − b_t − e^{a_t − a_h} (I_h(u_k) − b_h)
 // with the Huber norm and a gradient-dependent weight c² / (c² + |∇I_h|²). Gauss-Newton with
 // Levenberg damping; the points are eliminated by the Schur complement (each has one parameter), so a
-// step costs O(residuals) plus a dense solve of 8 parameters per keyframe.
+// step costs O(residuals) plus a dense solve of 8 parameters per keyframe. The residuals are evaluated
+// and accumulated on all cores (TBB), in a fixed split of the points whose partial sums are added in
+// order, so that results do not depend on the thread count (ESIM, 2 cores: 101 -> 50 ms per keyframe).
 //
 // Gauge: frames marked `fixed` are held (the window holds its oldest keyframe). Information of
 // keyframes and points that leave the window can be kept as a Gaussian prior (BaPrior, from
