@@ -1,7 +1,5 @@
 #include "backend/photometric_ba.hpp"
 
-#include <tbb/parallel_for.h>
-
 #include <Eigen/Cholesky>
 #include <array>
 #include <cmath>
@@ -9,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "core/parallel.hpp"
 #include "frontend/frame_tracker.hpp"  // sampleBilinear
 
 namespace eds {
@@ -22,14 +21,7 @@ double huberCost(double r, double d) {
   return a <= d ? 0.5 * r * r : d * (a - 0.5 * d);
 }
 
-// The points are processed in a fixed number of chunks, in parallel, and the chunks' sums are added
-// in chunk order: the result does not depend on the number of threads or their scheduling, so runs
-// are reproducible.
-constexpr int kChunks = 16;
-template <typename F>
-void forEachChunk(std::size_t n, F&& f) {
-  tbb::parallel_for(0, kChunks, [&](int c) { f(c, n * c / kChunks, n * (c + 1) / kChunks); });
-}
+constexpr int kChunks = kReductionChunks;
 }  // namespace
 
 PhotometricBA::PhotometricBA(const CameraModel& pinhole, BaConfig cfg) : cam_(pinhole), cfg_(cfg) {

@@ -1,0 +1,27 @@
+#pragma once
+// Deterministic parallel reductions: work over n items is cut into a fixed number of chunks, each
+// chunk sums into its own slot, and the caller adds the slots in chunk order. The result is then the
+// same whatever the number of threads or their scheduling, so runs are reproducible bit for bit.
+#include <tbb/parallel_for.h>
+
+#include <cstddef>
+
+namespace eds {
+
+constexpr int kReductionChunks = 16;
+
+// Calls f(chunk, begin, end) for every chunk of [0, n); in parallel when `parallel` (small jobs cost
+// more to hand out than to do), with the same chunks, hence the same sums, either way.
+template <typename F>
+void forEachChunk(std::size_t n, F&& f, bool parallel = true) {
+  const auto body = [&](int c) {
+    f(c, n * static_cast<std::size_t>(c) / kReductionChunks,
+      n * static_cast<std::size_t>(c + 1) / kReductionChunks);
+  };
+  if (parallel)
+    tbb::parallel_for(0, kReductionChunks, body);
+  else
+    for (int c = 0; c < kReductionChunks; ++c) body(c);
+}
+
+}  // namespace eds
