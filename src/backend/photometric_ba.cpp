@@ -21,7 +21,6 @@ double huberCost(double r, double d) {
   return a <= d ? 0.5 * r * r : d * (a - 0.5 * d);
 }
 
-constexpr int kChunks = kReductionChunks;
 }  // namespace
 
 PhotometricBA::PhotometricBA(const CameraModel& pinhole, BaConfig cfg) : cam_(pinhole), cfg_(cfg) {
@@ -175,7 +174,7 @@ double PhotometricBA::cost(const std::vector<BaFrame>& frames, const std::vector
     double c = 0, ss = 0;
     int n = 0;
   };
-  std::array<Sums, kChunks> part{};
+  std::array<Sums, kReductionChunks> part{};
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
     Sums& s = part[chunk];
     Eigen::Matrix<double, 8, 1> r;
@@ -300,7 +299,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   for (std::size_t i = 0; i < np; ++i) points[i].inv_depth = rho[i];
   // Outliers: observations whose pattern does not match any more (occlusion, wrong depth).
   const PairTransforms pairs(frames);
-  std::array<int, kChunks> removed{};
+  std::array<int, kReductionChunks> removed{};
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
     Eigen::Matrix<double, 8, 1> r;
     for (std::size_t i = begin; i < end; ++i) {
@@ -342,8 +341,8 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
   ne.bp.assign(points.size(), 0.0);
   ne.Hfp.setZero(dim, np);
   // Per chunk: its own frame blocks (summed below in chunk order); the point columns are disjoint.
-  std::vector<Eigen::MatrixXd> Hc(kChunks);
-  std::vector<Eigen::VectorXd> bc(kChunks);
+  std::vector<Eigen::MatrixXd> Hc(kReductionChunks);
+  std::vector<Eigen::VectorXd> bc(kReductionChunks);
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
     Eigen::MatrixXd& Hff = Hc[chunk];
     Eigen::VectorXd& bf = bc[chunk];
@@ -395,7 +394,7 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
       }
     }
   });
-  for (int c = 0; c < kChunks; ++c) {
+  for (int c = 0; c < kReductionChunks; ++c) {
     ne.Hff += Hc[c];
     ne.bf += bc[c];
   }

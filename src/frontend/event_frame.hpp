@@ -21,8 +21,9 @@ struct EventFrameConfig {
   // A DVS pixel re-arms its reference at each event, so after the brightness turns (rises, then falls)
   // the first event of the new polarity comes only once it has fallen a full threshold below the last
   // level: one event is missing at every reversal (hysteresis). The increments then trail the
-  // brightness: on the simulator, one event frame's pose matches the truth ~2 ms before the median
-  // event at C = 0.15 (0.8 ms at C = 0.05), ~0.2 px. With this on, each event whose pixel last fired
+  // brightness. On the simulator, one event frame's pose matches the truth ~2 ms before the median
+  // event at C = 0.15 (0.8 ms at C = 0.05), ~0.2 px; hysteresis is the suspected cause, not a settled
+  // one (a simulated sensor without it did worse). With this on, each event whose pixel last fired
   // with the other polarity adds the missing vote at the index midway between the two (the expected
   // re-crossing). It removes only part of the lag (2.2 -> 1.9 ms at C = 0.15; 0.8 -> 0.4 ms at 0.05)
   // and measured mixed in the pipeline (ESIM events 0.133 -> 0.130 cm, but the simulated desk at 5 Hz
