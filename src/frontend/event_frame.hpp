@@ -21,13 +21,13 @@ struct EventFrameConfig {
   // A DVS pixel re-arms its reference at each event, so after the brightness turns (rises, then falls)
   // the first event of the new polarity comes only once it has fallen a full threshold below the last
   // level: one event is missing at every reversal (hysteresis). The increments then trail the
-  // brightness. On the simulator, one event frame's pose matches the truth ~2 ms before the median
-  // event at C = 0.15 (0.8 ms at C = 0.05), ~0.2 px; hysteresis is the suspected cause, not a settled
-  // one (a simulated sensor without it did worse). With this on, each event whose pixel last fired
-  // with the other polarity adds the missing vote at the index midway between the two (the expected
-  // re-crossing). It removes only part of the lag (2.2 -> 1.9 ms at C = 0.15; 0.8 -> 0.4 ms at 0.05)
-  // and measured mixed in the pipeline (ESIM events 0.133 -> 0.130 cm, but the simulated desk at 5 Hz
-  // 0.185 -> 0.238 cm), so it is off by default.
+  // brightness. On the simulator at C = 0.15 this costs one event frame's pose ~0.7 mm at 1 m (medians
+  // over 11 instants: 1.75 mm with hysteresis, 1.07 mm from an idealized sensor without it,
+  // bench_tracker_sim_study); at C = 0.05 a third as much. With this on, each event whose pixel last
+  // fired with the other polarity adds the missing vote at the index midway between the two (the
+  // expected re-crossing). On the study it does not help (median 2.09 mm), and in the pipeline it
+  // measured mixed (ESIM events 0.133 -> 0.130 cm, but the simulated desk at 5 Hz 0.185 -> 0.238 cm),
+  // so it is off by default. Turns still pending at the packet's end cannot be seen at all.
   bool reversal_compensation = false;
   // Throws std::invalid_argument naming the bad field.
   void validate() const;

@@ -23,6 +23,7 @@ EventGenerator::EventGenerator(int width, int height, EventSimConfig cfg)
     throw std::invalid_argument("noise parameters must be non-negative (hot-pixel fraction <= 1)");
   const std::size_t n = static_cast<std::size_t>(width) * height;
   ref_.resize(n);
+  last_pol_.assign(n, 1);
   last_event_.assign(n, std::numeric_limits<TimeNs>::min() / 2);
   draws_.assign(n, 0);
   thr_pos_.resize(n);
@@ -62,7 +63,10 @@ void EventGenerator::reset(const cv::Mat& log_image, TimeNs t0) {
     const float* row = prev_.ptr<float>(y);
     for (int x = 0; x < width_; ++x) {
       const int i = y * width_ + x;
-      ref_[i] = row[x];
+      // Without hysteresis the signal starts mid-way between two levels (last crossed upwards), so
+      // neither direction's first event comes sooner.
+      ref_[i] = cfg_.hysteresis ? row[x] : static_cast<float>(row[x] - 0.5 * cfg_.C_pos);
+      last_pol_[i] = 1;
       thr_pos_[i] = static_cast<float>(threshold(i, +1));
       thr_neg_[i] = static_cast<float>(threshold(i, -1));
     }
@@ -94,7 +98,9 @@ void EventGenerator::step(const cv::Mat& log_image, TimeNs t1, EventArray& out) 
         // noise does not depend on how finely time is stepped.
         for (;;) {
           float& thr = pol > 0 ? thr_pos_[i] : thr_neg_[i];
-          const double next = ref + pol * static_cast<double>(thr);
+          // Without hysteresis, turning back re-crosses the last level first.
+          const bool recross = !cfg_.hysteresis && last_pol_[i] != pol;
+          const double next = recross ? ref : ref + pol * static_cast<double>(thr);
           const bool crossed = pol > 0 ? (next > it && next <= itdt) : (next < it && next >= itdt);
           if (!crossed) break;
           const TimeNs te = t0 + static_cast<TimeNs>(std::llround((next - it) / (itdt - it) * dt));
@@ -103,7 +109,8 @@ void EventGenerator::step(const cv::Mat& log_image, TimeNs t1, EventArray& out) 
             last_event_[i] = te;
           }
           ref = next;
-          thr = static_cast<float>(threshold(i, pol));
+          last_pol_[i] = static_cast<std::int8_t>(pol);
+          if (!recross) thr = static_cast<float>(threshold(i, pol));
         }
         ref_[i] = static_cast<float>(ref);
       }

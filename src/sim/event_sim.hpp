@@ -1,7 +1,8 @@
 #pragma once
 // ESIM-style event generation (Rebecq et al., CoRL 2018): each pixel keeps a reference log
 // intensity; between two renders the log intensity is taken as linear in time, and every crossing of
-// reference +/- C emits an event at the interpolated time and moves the reference by C. Noise models:
+// reference +/- C emits an event at the interpolated time and moves the reference by C (or, with
+// hysteresis off, every crossing of a fixed lattice of levels). Noise models:
 // per-crossing threshold noise, refractory period, background activity and hot pixels. Deterministic
 // for a seed, whatever the number of threads: every random draw comes from a counter-based hash of
 // (seed, pixel, draw index), not from a shared generator.
@@ -24,6 +25,12 @@ struct EventSimConfig {
   double hot_pixel_rate_hz = 100.0;  // their rate
   double log_eps = 1e-3;             // L = log(I + eps)
   std::uint64_t seed = 1;
+  // true: a DVS pixel, which re-arms at each event, so after the brightness turns the first event of
+  // the other polarity needs a full threshold past the last level (as in ESIM and real sensors).
+  // false: an idealized sensor that fires at every crossing of its lattice of levels, re-crossing the
+  // last one included, so the events count the brightness change without that lost event per turn.
+  // For studies of what hysteresis costs the tracker (tests/frontend/test_tracker_on_sim.cpp).
+  bool hysteresis = true;
 };
 
 class EventGenerator {
@@ -49,7 +56,8 @@ class EventGenerator {
   int width_, height_;
   EventSimConfig cfg_;
   cv::Mat prev_;                          // previous log image
-  std::vector<float> ref_;                // reference level per pixel
+  std::vector<float> ref_;                // reference level per pixel (the last level crossed)
+  std::vector<std::int8_t> last_pol_;     // polarity of that crossing (hysteresis off only)
   std::vector<TimeNs> last_event_;        // for the refractory period
   std::vector<std::uint32_t> draws_;      // per-pixel draw counters (threshold noise)
   std::vector<float> thr_pos_, thr_neg_;  // each pixel's next thresholds

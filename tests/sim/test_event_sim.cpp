@@ -141,6 +141,49 @@ TEST(Simulator, EventsIntegrateToTheLogIntensityChange) {
   EXPECT_GE(c, 0.98);
 }
 
+// One pixel driven by a wavering log intensity. Without hysteresis the sensor is a quantizer: the net
+// event count at any time is the current change rounded to whole thresholds, whatever the path. With
+// hysteresis (the default, as a DVS) every turn of the signal loses one event of the new polarity, so
+// the count strays from it; on a monotone ramp the two agree.
+TEST(EventGenerator, WithoutHysteresisTheNetCountIsTheRoundedChange) {
+  constexpr double C = 0.15;
+  auto signal = [](double t) { return 0.5 * std::sin(2.0 * t) + 0.3 * std::sin(6.3 * t + 1.0) - 0.4; };
+  auto run = [&](bool hysteresis, auto&& L, int& mismatches) {
+    EventSimConfig cfg;
+    cfg.C_pos = cfg.C_neg = C;
+    cfg.hysteresis = hysteresis;
+    EventGenerator gen(1, 1, cfg);
+    cv::Mat img(1, 1, CV_32F, cv::Scalar(L(0.0)));
+    gen.reset(img, 0);
+    EventArray ev;
+    int net = 0;
+    mismatches = 0;
+    for (int k = 1; k <= 20000; ++k) {
+      const std::size_t before = ev.size();
+      img.at<float>(0) = static_cast<float>(L(k * 1e-3));
+      gen.step(img, k * 1'000'000LL, ev);
+      for (std::size_t i = before; i < ev.size(); ++i) net += ev.p[i];
+      const double change = (static_cast<double>(img.at<float>(0)) - static_cast<float>(L(0.0))) / C;
+      // Levels are kept in float: a change within 1e-5 of a half threshold may round either way.
+      const bool tie = std::abs(std::abs(change - std::trunc(change)) - 0.5) < 1e-5;
+      if (!tie && net != static_cast<int>(std::lround(change))) ++mismatches;
+    }
+    return ev.size();
+  };
+  int miss_grid = 0, miss_dvs = 0;
+  const std::size_t n_grid = run(false, signal, miss_grid);
+  const std::size_t n_dvs = run(true, signal, miss_dvs);
+  std::printf("[ hysteresis ] events %zu without, %zu with; steps off the rounded change: %d, %d\n", n_grid,
+              n_dvs, miss_grid, miss_dvs);
+  EXPECT_EQ(miss_grid, 0);
+  EXPECT_GT(miss_dvs, 1000);  // of 20,000 steps
+  EXPECT_GT(n_grid, n_dvs);   // the events lost at the turns
+  // A monotone ramp has no turns: both sensors give the same events.
+  auto ramp = [](double t) { return 0.37 * t; };
+  int m0 = 0, m1 = 0;
+  EXPECT_EQ(run(false, ramp, m0), run(true, ramp, m1));
+}
+
 TEST(Simulator, FramesWarpIntoEachOtherWithTrueDepthAndPose) {
   const Motion motion(handheldMotion(0.3, 5));
   Scene scene = makePreset("room", motion, 5);
