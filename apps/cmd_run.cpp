@@ -118,6 +118,9 @@ void addRunCommand(CLI::App& app) {
   flag("!--no-keyframe-wait", c.wait_for_keyframe, "wait_for_keyframe",
        "Threaded back-end: tracking never waits for a new keyframe to be mapped (live cameras; "
        "less accurate)");
+  flag("!--no-reversal-compensation", c.event_frame.reversal_compensation,
+       "event_frame.reversal_compensation",
+       "Event frames without the events a DVS loses at each brightness turn put back");
   flag("--marginalization", c.backend.marginalize, "backend.marginalize",
        "Keep old keyframes' information as a prior (first-estimate Jacobians; off by default)");
   cmd->callback([a] { runRun(*a); });

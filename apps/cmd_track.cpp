@@ -78,6 +78,11 @@ void addTrackCommand(CLI::App& app) {
   cmd->add_flag(
       "!--no-frame-refine", a->cfg.refine_keyframes,
       "Keyframe poses from events only (default: refined by aligning the frame to the previous keyframe)");
+  cmd->add_flag("!--no-reversal-compensation", a->cfg.event_frame.reversal_compensation,
+                "Event frames without the events a DVS loses at each brightness turn put back");
+  cmd->add_option("--compensation-lookahead", a->cfg.event_frame.compensation_lookahead,
+                  "Events after each packet searched for its pending turns, in units of N")
+      ->capture_default_str();
   cmd->add_flag("--debug-images", a->debug_images, "Write event frame | EGM prediction PNGs to OUT/debug");
   cmd->callback([a] { runTrack(*a); });
 }

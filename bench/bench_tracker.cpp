@@ -68,6 +68,7 @@ void BM_TrackEventFrame(benchmark::State& state) {
   kf.points.resize(std::min<std::size_t>(kf.points.size(), static_cast<std::size_t>(state.range(0))));
   const Undistorter und(f.cam);
   EventFrameConfig efc;
+  efc.reversal_compensation = state.range(1) != 0;
   EventFrameBuilder builder(und, efc);
   EventTracker tracker(f.cam, {});
   tracker.setKeyframe(kf);
@@ -91,7 +92,14 @@ void BM_TrackEventFrame(benchmark::State& state) {
   state.counters["p95_ms"] = ms[std::min(ms.size() - 1, static_cast<std::size_t>(0.95 * ms.size()))];
 }
 
-BENCHMARK(BM_TrackEventFrame)->Arg(2000)->Arg(5000)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+// Second argument: reversal compensation on (the default) or off, to show what it costs.
+BENCHMARK(BM_TrackEventFrame)
+    ->Args({2000, 1})
+    ->Args({5000, 1})
+    ->Args({2000, 0})
+    ->Args({5000, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
 
 // Building one event frame alone, at 240x180 with 20,000 events and at 640x480 with 80,000 (what
 // `eds run` uses at VGA), radtan lens. Events at random pixels: time order scatters them over the

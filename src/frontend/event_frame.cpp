@@ -13,10 +13,18 @@ void EventFrameConfig::validate() const {
   if (!(overlap >= 0.0 && overlap < 1.0))
     throw std::invalid_argument("event frame: overlap must be in [0, 1), got " + std::to_string(overlap));
   if (!(sigma_frac > 0)) throw std::invalid_argument("event frame: sigma_frac must be > 0");
+  if (!(compensation_lookahead >= 0 && compensation_lookahead <= 10))
+    throw std::invalid_argument("event frame: compensation_lookahead must be in [0, 10], got " +
+                                std::to_string(compensation_lookahead));
 }
 
 std::size_t EventFrameConfig::stride() const {
   return std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(num_events * (1.0 - overlap))));
+}
+
+std::size_t EventFrameConfig::lookahead() const {
+  return reversal_compensation ? static_cast<std::size_t>(std::llround(num_events * compensation_lookahead))
+                               : 0;
 }
 
 EventFrameBuilder::EventFrameBuilder(const Undistorter& undistorter, EventFrameConfig cfg)
@@ -31,61 +39,43 @@ EventFrameBuilder::EventFrameBuilder(const Undistorter& undistorter, EventFrameC
   acc_.create(und_.pinhole().height, und_.pinhole().width, CV_32F);
   if (cfg_.reversal_compensation) {
     const std::size_t raw_pixels = static_cast<std::size_t>(und_.raw().width) * und_.raw().height;
-    last_index_.assign(raw_pixels, 0);
-    last_polarity_.assign(raw_pixels, 0);
-    stamp_.assign(raw_pixels, 0);
+    turns_.assign(raw_pixels, PixelTurns{});
+    listed_.assign(raw_pixels, 0);
   }
 }
 
-void EventFrameBuilder::build(const EventArray& events, std::size_t begin, EventFrame& out) {
+void EventFrameBuilder::vote(const cv::Point2f& u, float v) {
+  const int W = acc_.cols, H = acc_.rows;
+  const float fx = std::floor(u.x), fy = std::floor(u.y);
+  const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+  if (x0 < 0 || y0 < 0 || x0 + 1 >= W || y0 + 1 >= H) return;
+  const float ax = u.x - fx, ay = u.y - fy;
+  float* r0 = acc_.ptr<float>(y0) + x0;
+  float* r1 = r0 + W;
+  r0[0] += v * (1 - ax) * (1 - ay);
+  r0[1] += v * ax * (1 - ay);
+  r1[0] += v * (1 - ax) * ay;
+  r1[1] += v * ax * ay;
+}
+
+void EventFrameBuilder::build(const EventArray& events, std::size_t begin, EventFrame& out,
+                              std::uint64_t base) {
   const std::size_t n = static_cast<std::size_t>(cfg_.num_events);
   if (begin + n > events.size()) throw std::out_of_range("EventFrameBuilder: not enough events");
-  const int W = acc_.cols, H = acc_.rows;
   acc_.setTo(0.0f);
-  float* a = acc_.ptr<float>(0);
   const int raw_w = und_.raw().width, raw_h = und_.raw().height;
-  auto vote = [&](const cv::Point2f& u, float v) {
-    const float fx = std::floor(u.x), fy = std::floor(u.y);
-    const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
-    if (x0 < 0 || y0 < 0 || x0 + 1 >= W || y0 + 1 >= H) return;
-    const float ax = u.x - fx, ay = u.y - fy;
-    float* r0 = a + y0 * W + x0;
-    float* r1 = r0 + W;
-    r0[0] += v * (1 - ax) * (1 - ay);
-    r0[1] += v * ax * (1 - ay);
-    r1[0] += v * (1 - ax) * ay;
-    r1[1] += v * ax * ay;
-  };
-  const bool compensate = cfg_.reversal_compensation;
-  auto rawPixel = [&](std::size_t i) { return static_cast<std::size_t>(events.y[i]) * raw_w + events.x[i]; };
-  auto remember = [&](std::size_t px, std::size_t i) {
-    last_index_[px] = static_cast<std::int64_t>(i);
-    last_polarity_[px] = events.p[i];
-    stamp_[px] = generation_;
-  };
-  if (compensate) {
-    if (++generation_ == 0) {  // wrapped: old stamps could alias
-      std::fill(stamp_.begin(), stamp_.end(), 0u);
-      generation_ = 1;
-    }
-    // The pixels' last events before the packet: up to N events back, where the array still has them.
-    for (std::size_t i = begin - std::min(begin, n); i < begin; ++i)
-      if (events.x[i] < raw_w && events.y[i] < raw_h) remember(rawPixel(i), i);
-  }
-  const auto b = static_cast<std::int64_t>(begin);
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = begin + k;
     const int xr = events.x[i], yr = events.y[i];
     if (xr >= raw_w || yr >= raw_h) continue;
-    const cv::Point2f u = und_.eventLut(xr, yr);
-    vote(u, weights_[k] * static_cast<float>(events.p[i]));
-    if (!compensate) continue;
-    const std::size_t px = rawPixel(i);
-    if (stamp_[px] == generation_ && last_polarity_[px] != events.p[i]) {
-      const std::int64_t mid = (last_index_[px] + static_cast<std::int64_t>(i)) / 2 - b;
-      if (mid >= 0) vote(u, weights_[static_cast<std::size_t>(mid)] * static_cast<float>(events.p[i]));
-    }
-    remember(px, i);
+    vote(und_.eventLut(xr, yr), weights_[k] * static_cast<float>(events.p[i]));
+  }
+  if (cfg_.reversal_compensation) {
+    const std::uint64_t b = base + begin;
+    if (b < last_packet_ || base > frontier_) resetTurns(base);
+    last_packet_ = b;
+    advanceTurns(events, base, base + std::min(events.size(), begin + n + cfg_.lookahead()), b);
+    voteRestored(b);
   }
   if (cfg_.blur)
     cv::GaussianBlur(acc_, out.delta, cv::Size(3, 3), 0, 0, cv::BORDER_REPLICATE);
@@ -96,6 +86,81 @@ void EventFrameBuilder::build(const EventArray& events, std::size_t begin, Event
   out.t = events.t[begin + n / 2];
   out.t_first = events.t[begin];
   out.t_last = events.t[begin + n - 1];
+}
+
+void EventFrameBuilder::resetTurns(std::uint64_t from) {
+  std::fill(turns_.begin(), turns_.end(), PixelTurns{});
+  std::fill(listed_.begin(), listed_.end(), std::uint8_t{0});
+  restored_.clear();
+  waiting_.clear();
+  frontier_ = from;
+}
+
+void EventFrameBuilder::advanceTurns(const EventArray& events, std::uint64_t base, std::uint64_t to,
+                                     std::uint64_t b) {
+  const int raw_w = und_.raw().width, raw_h = und_.raw().height;
+  const auto packet = static_cast<std::int64_t>(b);
+  constexpr std::uint64_t kAhead = 16;  // events: the pixel states are read out of cache order
+  for (std::uint64_t s = frontier_; s < to; ++s) {
+    const std::size_t i = static_cast<std::size_t>(s - base);
+    if (s + kAhead < to) {
+      const std::size_t j = i + kAhead;
+      const std::size_t ahead = static_cast<std::size_t>(events.y[j]) * raw_w + events.x[j];
+      if (ahead < turns_.size()) __builtin_prefetch(&turns_[ahead]);
+    }
+    if (events.x[i] >= raw_w || events.y[i] >= raw_h) continue;
+    const auto px = static_cast<std::uint32_t>(events.y[i] * raw_w + events.x[i]);
+    PixelTurns& pt = turns_[px];
+    const bool positive = events.p[i] > 0;
+    const auto k = static_cast<std::int64_t>(s);
+    if (pt.prev >= 0) {  // a turn (the last event) waiting for this, the pixel's next event
+      // Still going the turn's way: the re-crossing came one such step before the turn's event;
+      // otherwise midway between the turn and the event before it.
+      const std::int64_t t = pt.last >> 1, j = pt.prev;
+      const bool turn_positive = (pt.last & 1) != 0;
+      const std::int64_t r = positive == turn_positive ? std::max(j, t - (k - t)) : j + (t - j) / 2;
+      if (r >= packet) restored_.push_back({r, px, turn_positive});
+      pt.prev = -1;
+    }
+    if (pt.last >= 0 && ((pt.last & 1) != 0) != positive) {  // a turn
+      pt.prev = pt.last >> 1;
+      if (!listed_[px]) listed_[px] = 1, waiting_.push_back(px);
+    }
+    pt.last = (k << 1) | (positive ? 1 : 0);
+  }
+  frontier_ = std::max(frontier_, to);
+}
+
+void EventFrameBuilder::voteRestored(std::uint64_t b) {
+  const auto first = static_cast<std::int64_t>(b), end = first + cfg_.num_events;
+  const int raw_w = und_.raw().width;
+  auto restore = [&](std::uint32_t px, std::int64_t r, bool positive) {
+    const float w = weights_[static_cast<std::size_t>(r - first)];
+    vote(und_.eventLut(static_cast<int>(px % raw_w), static_cast<int>(px / raw_w)), positive ? w : -w);
+  };
+  // Restored events before this packet are no use to later ones either.
+  std::size_t kept = 0;
+  for (const Restored& e : restored_) {
+    if (e.index < first) continue;
+    if (e.index < end) restore(e.pixel, e.index, e.positive);
+    restored_[kept++] = e;
+  }
+  restored_.resize(kept);
+  // Turns whose next event has not come yet: midway between the turn and the event before it. A turn
+  // before this packet cannot land in it or in any later one.
+  kept = 0;
+  for (const std::uint32_t px : waiting_) {
+    const PixelTurns& pt = turns_[px];
+    const std::int64_t t = pt.last >> 1;
+    if (pt.prev < 0 || t < first) {
+      listed_[px] = 0;
+      continue;
+    }
+    const std::int64_t r = pt.prev + (t - pt.prev) / 2;
+    if (r >= first && r < end) restore(px, r, (pt.last & 1) != 0);
+    waiting_[kept++] = px;
+  }
+  waiting_.resize(kept);
 }
 
 namespace {

@@ -3,6 +3,7 @@
 // keeping only a bounded window of events in memory.
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 
 #include "core/events.hpp"
 #include "io/event_source.hpp"
@@ -11,31 +12,41 @@ namespace eds {
 
 class EventPacketStream {
  public:
-  EventPacketStream(EventSource& src, std::size_t n, std::size_t stride)
-      : src_(src), n_(n), stride_(stride) {}
+  // `lookahead`: events after each packet that must be read too, where the stream has them (the
+  // builder's EventFrameConfig::lookahead()).
+  EventPacketStream(EventSource& src, std::size_t n, std::size_t stride, std::size_t lookahead = 0)
+      : src_(src), n_(n), stride_(stride), lookahead_(lookahead) {}
+  // The next packet: events [begin, begin + N) of *events. False at the end of the stream.
   bool next(const EventArray*& events, std::size_t& begin) {
-    while (buf_.size() < pos_ + n_) {
+    while (!exhausted_ && buf_.size() < pos_ + n_ + lookahead_) {
       if (pos_ > (1u << 20)) compact();
-      if (src_.read(buf_, 1 << 18) == 0) return false;
+      if (src_.read(buf_, 1 << 18) == 0) exhausted_ = true;
     }
+    if (buf_.size() < pos_ + n_) return false;
     events = &buf_;
     begin = pos_;
     pos_ += stride_;
     return true;
   }
+  // Stream index of (*events)[0]: how many events were dropped before it.
+  std::uint64_t base() const { return dropped_; }
 
  private:
   void compact() {
-    // Keeps N events before the next packet: the builder looks back at them (reversal_compensation).
+    // Keeps N events before the next packet: those after the last packet's start have not been
+    // seen by the builder's per-pixel memory yet (stride <= N).
     const auto d = static_cast<std::ptrdiff_t>(pos_ - std::min(pos_, n_));
     buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
     buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
     buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
     buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
     pos_ -= static_cast<std::size_t>(d);
+    dropped_ += static_cast<std::uint64_t>(d);
   }
   EventSource& src_;
-  std::size_t n_, stride_, pos_ = 0;
+  std::size_t n_, stride_, lookahead_, pos_ = 0;
+  std::uint64_t dropped_ = 0;
+  bool exhausted_ = false;
   EventArray buf_;
 };
 

@@ -292,13 +292,13 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
   if (cfg.use_events) {
     auto src = seq.openEvents();
     EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
-                              cfg.event_frame.stride());
+                              cfg.event_frame.stride(), cfg.event_frame.lookahead());
     EventFrameBuilder builder(run.undistorter(), cfg.event_frame);
     const EventArray* events = nullptr;
     std::size_t begin = 0;
     EventFrame ef;
     while (packets.next(events, begin)) {
-      builder.build(*events, begin, ef);
+      builder.build(*events, begin, ef, packets.base());
       if (ef.t < res.first_t) continue;
       if (ef.t > t_end) break;
       while (next < idx.size() && seq.frames()[idx[next]].t <= ef.t) run.frame(idx[next++]);

@@ -80,6 +80,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["event_frame.num_events"] = &c.event_frame.num_events, f["event_frame.overlap"] = &c.event_frame.overlap;
   f["event_frame.sigma_frac"] = &c.event_frame.sigma_frac, f["event_frame.blur"] = &c.event_frame.blur;
   f["event_frame.reversal_compensation"] = &c.event_frame.reversal_compensation;
+  f["event_frame.compensation_lookahead"] = &c.event_frame.compensation_lookahead;
   EventTrackerConfig& et = c.events.tracker;
   f["events.tracker.max_iterations"] = &et.max_iterations, f["events.tracker.levels"] = &et.levels;
   f["events.tracker.huber_initial"] = &et.huber_initial, f["events.tracker.adapt_huber"] = &et.adapt_huber;

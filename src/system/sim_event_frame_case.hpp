@@ -15,14 +15,14 @@
 namespace eds {
 
 struct SimEventFrameCaseConfig {
-  double keyframe_time_s = 0.0;        // when the keyframe is rendered; the sensor runs from t = 0
-  double event_frame_delay_s = 0.04;   // the event frame's centre event, after the keyframe
-  int num_events = 30000;              // N of the event frame
-  double contrast = 0.15;              // C, both polarities
-  bool hysteresis = true;              // the sensor model's (false: an idealized sensor)
-  bool reversal_compensation = false;  // the event frame builder's
-  double texture_blur_px = 3.0;        // detail above the pixel scale, as natural scenes at 1 m
-  unsigned seed = 21;                  // motion and scene
+  double keyframe_time_s = 0.0;       // when the keyframe is rendered; the sensor runs from t = 0
+  double event_frame_delay_s = 0.04;  // the event frame's centre event, after the keyframe
+  int num_events = 30000;             // N of the event frame
+  double contrast = 0.15;             // C, both polarities
+  bool hysteresis = true;             // the sensor model's (false: an idealized sensor)
+  bool reversal_compensation = true;  // the event frame builder's
+  double texture_blur_px = 3.0;       // detail above the pixel scale, as natural scenes at 1 m
+  unsigned seed = 21;                 // motion and scene
 };
 
 struct SimEventFrameCase {

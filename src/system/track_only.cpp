@@ -131,7 +131,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
 
   auto src = seq.openEvents();
   EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
-                            cfg.event_frame.stride());
+                            cfg.event_frame.stride(), cfg.event_frame.lookahead());
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;
@@ -145,7 +145,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
 
   while (packets.next(events, begin)) {
     const auto tb = Clock::now();
-    ef_builder.build(*events, begin, ef);
+    ef_builder.build(*events, begin, ef, packets.base());
     if (ef.t < frames[0].t) continue;
     if (ef.t > t_end) break;
     res.build_ms.push_back(msSince(tb));

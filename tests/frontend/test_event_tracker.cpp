@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "frontend/event_frame.hpp"
+#include "frontend/event_packets.hpp"
 #include "frontend/event_tracker.hpp"
 #include "frontend/point_selection.hpp"
 
@@ -71,9 +73,13 @@ TEST(EventFrame, GaussianWeightsBilinearVotesMedianTimeUnitNorm) {
 }
 
 TEST(EventFrame, ReversalCompensationAddsTheEventTheHysteresisHeldBack) {
-  // Pixel A fires + + then - -: its first "-" comes a full threshold below the last level, one event
-  // late; the builder adds it back at the index midway between A's last "+" and that "-". Pixel B
-  // never reverses and is left alone. Pixel C's last event before the packet (index 1) counts too.
+  // Packet = array indices 3..9 (N = 7). Pixel A fires + + then - -: its first "-" (index 6) comes a
+  // full threshold below the last level, one event late; its next "-" two indices later says the
+  // brightness falls a threshold per two indices, so the missing "-" goes two before index 6 (at 4,
+  // packet index 1). Pixel B never turns and is left alone. Pixel C's "+" before the packet (index 1)
+  // counts: its turn at index 9 has no next event, so the missing "-" goes midway (index 5). Pixel D
+  // turns only after the packet (index 11, then turns back at 12): the lookahead finds it, midway
+  // between index 2 and 11 lands in the packet (index 6).
   const Undistorter und(pinhole240());
   EventFrameConfig cfg;
   cfg.num_events = 7;
@@ -82,24 +88,86 @@ TEST(EventFrame, ReversalCompensationAddsTheEventTheHysteresisHeldBack) {
   auto add = [&](std::uint16_t x, int p) {
     ev.push_back(1000 + 10 * static_cast<TimeNs>(ev.size()), x, 60, p);
   };
-  add(90, 1), add(70, 1), add(91, 1);  // 0-2: before the packet
-  add(50, 1), add(50, 1), add(60, 1), add(50, -1), add(60, 1), add(50, -1), add(70, -1);  // 3-9
+  const std::uint16_t A = 50, B = 60, C = 70, D = 80;
+  add(90, 1), add(C, 1), add(D, 1);                                                // 0-2: before
+  add(A, 1), add(A, 1), add(B, 1), add(A, -1), add(B, 1), add(A, -1), add(C, -1);  // 3-9: packet
+  add(85, 1), add(D, -1), add(D, 1), add(85, 1);                                   // 10-13: after
   auto w = [&](int k) { return std::exp(-0.5 * std::pow((k - 3.0) / (7.0 / 6.0), 2)); };
-  EventFrame on, off;
-  cfg.reversal_compensation = true;
-  EventFrameBuilder(und, cfg).build(ev, 3, on);
-  cfg.reversal_compensation = false;
-  EventFrameBuilder(und, cfg).build(ev, 3, off);
-  const double b = w(2) + w(4);  // pixel B (x = 60), packet indices 2 and 4
-  // Without compensation A = w0 + w1 - w3 - w5.
-  EXPECT_NEAR(off.delta.at<float>(60, 50) / off.delta.at<float>(60, 60), (w(0) + w(1) - w(3) - w(5)) / b,
-              1e-5);
-  // With it, A's first "-" (packet index 3, last "+" at 1) adds -w(2); its second "-" adds nothing.
-  EXPECT_NEAR(on.delta.at<float>(60, 50) / on.delta.at<float>(60, 60), (w(0) + w(1) - w(3) - w(5) - w(2)) / b,
-              1e-5);
-  // C: "+" at array index 1, "-" at 9 (packet index 6): the midway index 5 is packet index 2.
-  EXPECT_NEAR(on.delta.at<float>(60, 70) / on.delta.at<float>(60, 60), -(w(6) + w(2)) / b, 1e-5);
-  EXPECT_NEAR(off.delta.at<float>(60, 70) / off.delta.at<float>(60, 60), -w(6) / b, 1e-5);
+  auto build = [&](bool compensate, double lookahead) {
+    cfg.reversal_compensation = compensate;
+    cfg.compensation_lookahead = lookahead;
+    EventFrame f;
+    EventFrameBuilder(und, cfg).build(ev, 3, f);
+    const float b = f.delta.at<float>(60, B);
+    return std::array<double, 3>{f.delta.at<float>(60, A) / b, f.delta.at<float>(60, C) / b,
+                                 f.delta.at<float>(60, D) / b};
+  };
+  const double b = w(2) + w(4);  // pixel B: packet indices 2 and 4
+  const auto off = build(false, 1.0), on = build(true, 1.0), near = build(true, 0.0);
+  EXPECT_NEAR(off[0], (w(0) + w(1) - w(3) - w(5)) / b, 1e-5);
+  EXPECT_NEAR(off[1], -w(6) / b, 1e-5);
+  EXPECT_NEAR(off[2], 0.0, 1e-7);
+  EXPECT_NEAR(on[0], (w(0) + w(1) - w(3) - w(5) - w(1)) / b, 1e-5);
+  EXPECT_NEAR(on[1], -(w(6) + w(2)) / b, 1e-5);
+  EXPECT_NEAR(on[2], -w(3) / b, 1e-5);
+  // Without lookahead D's turn is not seen; A's and C's are the same.
+  EXPECT_NEAR(near[0], on[0], 1e-6);
+  EXPECT_NEAR(near[1], on[1], 1e-6);
+  EXPECT_NEAR(near[2], 0.0, 1e-7);
+}
+
+// Hands out a stored array in chunks of a few hundred events.
+class ChunkedSource : public EventSource {
+ public:
+  explicit ChunkedSource(const EventArray& all) : all_(all) {}
+  std::size_t read(EventArray& out, std::size_t max_events) override {
+    const std::size_t n = std::min({max_events, std::size_t{777}, all_.size() - pos_});
+    for (std::size_t i = pos_; i < pos_ + n; ++i) out.push_back(all_.t[i], all_.x[i], all_.y[i], all_.p[i]);
+    pos_ += n;
+    return n;
+  }
+
+ private:
+  const EventArray& all_;
+  std::size_t pos_ = 0;
+};
+
+TEST(EventFrame, CompensatedFramesFromAStreamEqualThoseFromTheWholeArray) {
+  // The packet stream drops old events as it goes (past 2^20 of them) and stops at the end with a
+  // short lookahead; the builder's per-pixel memory must make the frames identical to those built
+  // from the whole array, where every earlier event is at hand.
+  // Most events on a busy patch, some spread thinly over the whole sensor: those pixels fire every
+  // few hundred thousand events, so only a memory of the whole past knows their last polarity.
+  const CameraModel cam = pinhole240();
+  const Undistorter und(cam);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> busy(0, 24 * 18 - 1), any(0, cam.width * cam.height - 1), flip(0, 9);
+  std::vector<int> pol(cam.width * cam.height, 1);
+  EventArray all;
+  for (int i = 0; i < 1'300'000; ++i) {
+    int q = any(rng);
+    if (flip(rng) != 0) q = 100 * cam.width + 100 + (busy(rng) / 24) * cam.width + busy(rng) % 24;
+    if (flip(rng) == 0) pol[q] = -pol[q];  // runs of one polarity with turns in between
+    all.push_back(1000 + i, static_cast<std::uint16_t>(q % cam.width),
+                  static_cast<std::uint16_t>(q / cam.width), pol[q]);
+  }
+  EventFrameConfig cfg;
+  cfg.num_events = 4000;
+  ChunkedSource src(all);
+  EventPacketStream stream(src, cfg.num_events, cfg.stride(), cfg.lookahead());
+  EventFrameBuilder from_stream(und, cfg), from_array(und, cfg);
+  const EventArray* events = nullptr;
+  std::size_t begin = 0, frames = 0, differing = 0;
+  EventFrame a, b;
+  while (stream.next(events, begin)) {
+    from_stream.build(*events, begin, a, stream.base());
+    from_array.build(all, static_cast<std::size_t>(stream.base() + begin), b);
+    if (cv::norm(a.delta, b.delta, cv::NORM_INF) != 0.0) ++differing;
+    ++frames;
+  }
+  EXPECT_GT(stream.base(), 0u);  // the stream did drop events
+  EXPECT_EQ(frames, (all.size() - cfg.num_events) / cfg.stride() + 1);
+  EXPECT_EQ(differing, 0u);
 }
 
 Keyframe syntheticKeyframe(const CameraModel& cam, int n, unsigned seed) {

@@ -29,30 +29,33 @@ TEST(EventTrackerOnSim, RecoversThePoseFromOneDegreeAndOneCentimetreOff) {
               o.T_ef_kf_true.so3().angle() * 180 / M_PI, o.T_ef_kf_true.translation().norm() * 1000);
   EXPECT_TRUE(res.ok) << res.failure;
   EXPECT_LT(rot_deg, 0.1);
-  // Issue #4 asks for < 1 mm; at C = 0.15 we measure ~2.7 mm here. The cause is the sensor's
-  // hysteresis: each turn of a pixel's brightness loses one event (event_frame.hpp), and the same
-  // events from an idealized sensor without it give 1.1 mm here. One event frame's error also
-  // varies by ~1 mm with the instant: bench_tracker_sim_study repeats this case at 11 instants
-  // (medians 1.75 mm with hysteresis, 1.07 mm without). Asserted at what we achieve so a
-  // regression shows; the gap is reported in the issue. With finer thresholds the point holds (next test).
-  EXPECT_LT(trans_mm, 3.0);
+  // Issue #4, acceptance 2: < 1 mm; we measure 0.82 mm here. Without the event frame's reversal
+  // compensation it is 2.7 mm: a DVS pixel loses one event at each turn of its brightness
+  // (event_frame.hpp). One frame's error varies with the instant: bench_tracker_sim_study repeats
+  // this case at 11 instants, median 1.23 mm (5 of 11 under 1 mm; 1.07 mm from an idealized sensor
+  // without hysteresis), so at C = 0.15 this instant is not the rule; at C = 0.05 every instant
+  // passes (next test).
+  EXPECT_LT(trans_mm, 1.0);
 }
 
-TEST(EventTrackerOnSim, RecoversThePoseToUnderAMillimetreWithFineThresholds) {
-  // Issue #4's acceptance 2 with C = 0.05 and an event frame of the same span (90,000 events): the
-  // loss at each brightness turn is a third of the one at C = 0.15. Over 11 instants
-  // (bench_tracker_sim_study 0.05 90000) the median is 0.61 mm / 0.030 deg, 9 of 11 under 1 mm.
-  SimEventFrameCaseConfig cfg;
-  cfg.contrast = 0.05;
-  cfg.num_events = 90000;
-  const SimEventFrameCase o = makeSimEventFrameCase(cfg);
+TEST(EventTrackerOnSim, RecoversThePoseToUnderAMillimetreAtEveryInstantWithFineThresholds) {
+  // Issue #4's acceptance 2 with C = 0.05 and event frames of about the same span (90,000 events),
+  // at four instants of the motion. Over 11 instants (bench_tracker_sim_study 0.05 90000) the median
+  // is 0.27 mm / 0.017 deg and the worst 0.55 mm / 0.044 deg.
   const SE3 offset(SO3::exp(Vec3(0.6, -0.8, 0.0).normalized() * (M_PI / 180.0)), Vec3(0.006, -0.008, 0.0));
-  const SimCaseSolution s = trackSimCase(o, offset);
-  std::printf("[ tracker on sim ] C = 0.05: events %.1f..%.1f ms, error %.4f deg, %.3f mm\n",
-              toSeconds(o.ef.t_first) * 1e3, toSeconds(o.ef.t_last) * 1e3, s.rot_err_deg, s.trans_err_mm);
-  EXPECT_TRUE(s.first.ok) << s.first.failure;
-  EXPECT_LT(s.rot_err_deg, 0.1);
-  EXPECT_LT(s.trans_err_mm, 1.0);
+  for (const double t_kf : {0.0, 0.15, 0.3, 0.45}) {
+    SimEventFrameCaseConfig cfg;
+    cfg.keyframe_time_s = t_kf;
+    cfg.contrast = 0.05;
+    cfg.num_events = 90000;
+    const SimEventFrameCase o = makeSimEventFrameCase(cfg);
+    const SimCaseSolution s = trackSimCase(o, offset);
+    std::printf("[ tracker on sim ] C = 0.05, keyframe at %.2f s: error %.4f deg, %.3f mm\n", t_kf,
+                s.rot_err_deg, s.trans_err_mm);
+    EXPECT_TRUE(s.first.ok) << s.first.failure;
+    EXPECT_LT(s.rot_err_deg, 0.1) << "keyframe at " << t_kf << " s";
+    EXPECT_LT(s.trans_err_mm, 1.0) << "keyframe at " << t_kf << " s";
+  }
 }
 
 double translationErrorMm(const SE3& T, const SE3& T_true) {
@@ -91,7 +94,7 @@ TEST(EventTrackerOnSim, APosePriorWeighsAsItsSigmaSays) {
   auto dist = [](const SE3& a, const SE3& b) { return (a * b.inverse()).log().norm(); };
   EXPECT_LT(dist(T_loose, T_free), 1e-6);
   EXPECT_LT(dist(T_tight, prior.T_ef_kf), 1e-5);
-  EXPECT_LT(translationErrorMm(T_trans, prior.T_ef_kf), 0.5);
+  EXPECT_LT(translationErrorMm(T_trans, prior.T_ef_kf), 0.75);  // a quarter of the 3 mm the events pull
   const double rot_trans = (T_trans * o.T_ef_kf_true.inverse()).so3().angle() * 180 / M_PI;
   std::printf("[ tracker on sim ] translation held 3 mm off: rotation error %.4f deg (prior's: 0.3)\n",
               rot_trans);
