@@ -70,6 +70,11 @@ TEST(EventFrame, GaussianWeightsBilinearVotesMedianTimeUnitNorm) {
   bad = {};
   bad.num_events = 0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = {};
+  bad.compensation_lookahead = -0.5;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad.compensation_lookahead = std::nan("");
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
 TEST(EventFrame, ReversalCompensationAddsTheEventTheHysteresisHeldBack) {
