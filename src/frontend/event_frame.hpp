@@ -36,7 +36,7 @@ struct EventFrameConfig {
   bool reversal_compensation = true;
   // Events after the packet read for its pending turns, in units of N. They delay each event frame by
   // that many events (1.0 measured better than 2.0 on the simulated room; 0 keeps only the turns
-  // that complete inside the packet).
+  // that complete inside the packet, and with 0 or 0.5 tracking-only on the simulated desk diverged).
   double compensation_lookahead = 1.0;
   // Throws std::invalid_argument naming the bad field.
   void validate() const;

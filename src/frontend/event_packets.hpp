@@ -33,9 +33,9 @@ class EventPacketStream {
 
  private:
   void compact() {
-    // Keeps N events before the next packet: those after the last packet's start have not been
-    // seen by the builder's per-pixel memory yet (stride <= N).
-    const auto d = static_cast<std::ptrdiff_t>(pos_ - std::min(pos_, n_));
+    // Drops everything before the next packet: the builder's per-pixel memory has already run past
+    // it (up to the last packet's end and lookahead).
+    const auto d = static_cast<std::ptrdiff_t>(pos_);
     buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
     buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
     buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);

@@ -20,9 +20,9 @@ struct SimEventFrameCaseConfig {
   int num_events = 30000;             // N of the event frame
   double contrast = 0.15;             // C, both polarities
   bool hysteresis = true;             // the sensor model's (false: an idealized sensor)
-  bool reversal_compensation = true;  // the event frame builder's
-  double texture_blur_px = 3.0;       // detail above the pixel scale, as natural scenes at 1 m
-  unsigned seed = 21;                 // motion and scene
+  bool reversal_compensation = EventFrameConfig{}.reversal_compensation;  // the builder's
+  double texture_blur_px = 3.0;  // detail above the pixel scale, as natural scenes at 1 m
+  unsigned seed = 21;            // motion and scene
 };
 
 struct SimEventFrameCase {
