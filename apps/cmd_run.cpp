@@ -19,14 +19,15 @@ namespace eds::app {
 namespace {
 
 struct RunArgs {
-  std::string sequence, out = "run_out", config;
+  std::string sequence, out = "run_out", config, calib;
   bool frames_only = false;
   OdometryConfig cli;                                      // what the options wrote
   std::vector<std::pair<CLI::Option*, std::string>> keys;  // option -> parameter name
 };
 
 void runRun(RunArgs& a) {
-  const Sequence seq(a.sequence);
+  Sequence seq(a.sequence);
+  if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   // Defaults for the sensor's size, then the file, then the command line.
   OdometryConfig cfg = defaultOdometryConfig(seq.camera().width, seq.camera().height);
   if (!a.config.empty()) loadOdometryConfig(a.config, cfg);
@@ -74,6 +75,10 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("sequence", a->sequence, "Sequence folder")->required();
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
   cmd->add_option("--config", a->config, "YAML file of parameters (as config_used.yaml writes them)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--calib", a->calib,
+                  "Calibration instead of the sequence's own (ECD calib.txt, e.g. from `eds calibrate`, or "
+                  "Kalibr YAML)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--frames-only", a->frames_only,
                 "Frames alone (no events): bootstrap, frame tracking, mapping, back-end");

@@ -12,7 +12,7 @@ namespace eds::app {
 namespace {
 
 struct TrackArgs {
-  std::string sequence, out = "track_out";
+  std::string sequence, out = "track_out", calib;
   bool depth_from_gt = false, debug_images = false;
   TrackOnlyConfig cfg;
 };
@@ -20,7 +20,8 @@ struct TrackArgs {
 void runTrack(TrackArgs& a) {
   if (!a.depth_from_gt)
     throw std::invalid_argument("eds track needs --depth-from-gt (depth from mapping is `eds run`)");
-  const Sequence seq(a.sequence);
+  Sequence seq(a.sequence);
+  if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   const std::filesystem::path out(a.out);
   std::filesystem::create_directories(out);
   if (a.debug_images) {
@@ -48,6 +49,9 @@ void addTrackCommand(CLI::App& app) {
       ->required();
   cmd->add_flag("--depth-from-gt", a->depth_from_gt, "Keyframe depth from the sequence's depth maps");
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
+  cmd->add_option("--calib", a->calib,
+                  "Calibration instead of the sequence's own (ECD calib.txt or Kalibr YAML)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--events", a->cfg.event_frame.num_events, "Events per event frame (N)")
       ->capture_default_str();
   cmd->add_option("--overlap", a->cfg.event_frame.overlap, "Overlap of consecutive event frames, [0, 1)")

@@ -10,5 +10,6 @@ void addEvalCommand(CLI::App& app);
 void addSimulateCommand(CLI::App& app);
 void addTrackCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
+void addCalibrateCommand(CLI::App& app);
 
 }  // namespace eds::app

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   eds::app::addSimulateCommand(app);
   eds::app::addTrackCommand(app);
   eds::app::addRunCommand(app);
+  eds::app::addCalibrateCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -144,6 +144,27 @@ Sequence::Sequence(const fs::path& dir) : dir_(dir) {
   }
 }
 
+void Sequence::setCamera(const CameraModel& camera, const std::string& source) {
+  camera.validate(source);
+  if ((camera.width > 0 && width_ > 0 && camera.width != width_) ||
+      (camera.height > 0 && height_ > 0 && camera.height != height_))
+    throw std::invalid_argument(source + ": calibration is " + std::to_string(camera.width) + "x" +
+                                std::to_string(camera.height) + " but the sequence's images are " +
+                                std::to_string(width_) + "x" + std::to_string(height_));
+  camera_ = camera;
+  if (width_ > 0)
+    camera_->width = width_, camera_->height = height_;
+  else
+    width_ = camera.width, height_ = camera.height;
+}
+
+CameraModel readCameraFile(const fs::path& file) {
+  const std::string ext = file.extension().string();
+  if (ext == ".yaml" || ext == ".yml")
+    return cameraFromKalibr(readKalibrCamera(file.string()), file.string());
+  return readEcdCalib(file);
+}
+
 bool Sequence::hasGroundTruth() const {
   std::error_code ec;
   return fs::is_regular_file(dir_ / "groundtruth.txt", ec);

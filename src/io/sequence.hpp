@@ -39,6 +39,9 @@ class Sequence {
 
   // Calibration with resolution (from the Kalibr file, else the first image, else unknown = 0).
   const CameraModel& camera() const;
+  // Replaces the folder's calibration (e.g. with a refined lens from `eds calibrate`). The sensor size
+  // stays the sequence's; std::invalid_argument if the camera is invalid or its size disagrees.
+  void setCamera(const CameraModel& camera, const std::string& source);
   const std::filesystem::path& eventsFile() const { return events_file_; }
   std::unique_ptr<EventSource> openEvents() const;
 
@@ -66,6 +69,9 @@ CameraModel readEcdCalib(const std::filesystem::path& file);
 struct KalibrCamera;
 // Converts a Kalibr camera to a CameraModel; InputError naming `source` if unsupported or invalid.
 CameraModel cameraFromKalibr(const KalibrCamera& k, const std::string& source);
+// Reads a calibration file: a Kalibr camchain if it ends in .yaml/.yml, else an ECD calib.txt line
+// (size 0: the sequence gives it).
+CameraModel readCameraFile(const std::filesystem::path& file);
 // Reads images.txt (`t images/frame_X.png`); paths relative to the file's folder, checked to exist.
 std::vector<FrameRef> readImageList(const std::filesystem::path& file);
 

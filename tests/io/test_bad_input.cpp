@@ -205,5 +205,17 @@ TEST_F(BadInput, CalibrationMissingWhenAskedFor) {
   expectError([&] { seq.camera(); }, dir_ / "calib.txt", 0, "not found");
 }
 
+TEST_F(BadInput, CalibrationOverride) {
+  write("events.txt", "0.1 1 2 1\n");
+  Sequence seq(dir_);
+  const auto f = write("other.txt", "200 200 120 90 -0.1 0.01 0 0 0\n");
+  seq.setCamera(readCameraFile(f), f.string());
+  EXPECT_DOUBLE_EQ(seq.camera().k[0], -0.1);
+  CameraModel c = seq.camera();
+  c.fx = -1;
+  EXPECT_THROW(seq.setCamera(c, "neg"), std::invalid_argument);
+  expectError([&] { readCameraFile(write("bad.txt", "200 200 x\n")); }, dir_ / "bad.txt", 1, "");
+}
+
 }  // namespace
 }  // namespace eds

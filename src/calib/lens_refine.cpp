@@ -1,0 +1,313 @@
+#include "calib/lens_refine.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace eds {
+
+void LensRefineConfig::validate() const {
+  auto need = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("lens refinement: ") + what);
+  };
+  need(huber_px > 0, "huber_px must be positive");
+  need(outlier_px > 0, "outlier_px must be positive");
+  need(min_parallax_deg >= 0 && min_parallax_deg < 90, "min_parallax_deg must be in [0, 90)");
+  need(min_observations >= 2, "min_observations must be >= 2");
+  need(max_iterations > 0, "max_iterations must be positive");
+}
+
+namespace {
+
+// Raw-pixel reprojection error of a world point seen by a camera with pose T_c_w = (q, t).
+struct ReprojectionCost {
+  explicit ReprojectionCost(const Vec2& obs) : obs_(obs) {}
+  template <typename T>
+  bool operator()(const T* q, const T* t, const T* p_w, const T* proj, const T* dist, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_c_w(q);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_c_w(t), point(p_w);
+    const Eigen::Matrix<T, 3, 1> p_c = q_c_w * point + t_c_w;
+    if (p_c.z() <= T(1e-9)) return false;  // behind the camera: the step is rejected
+    T xd, yd;
+    distortRadTan(dist, p_c.x() / p_c.z(), p_c.y() / p_c.z(), &xd, &yd);
+    r[0] = proj[0] * xd + proj[2] - T(obs_.x());
+    r[1] = proj[1] * yd + proj[3] - T(obs_.y());
+    return true;
+  }
+  Vec2 obs_;
+};
+
+// Fixes the scale gauge: the distance between the first posed camera (held constant) and the last.
+struct BaselineCost {
+  BaselineCost(const Vec3& c0, double d0) : c0_(c0), d0_(d0) {}
+  template <typename T>
+  bool operator()(const T* q, const T* t, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_c_w(q);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_c_w(t);
+    const Eigen::Matrix<T, 3, 1> c = -(q_c_w.conjugate() * t_c_w);
+    r[0] = T(100) * ((c - c0_.cast<T>()).norm() - T(d0_)) / T(d0_);
+    return true;
+  }
+  Vec3 c0_;
+  double d0_;
+};
+
+struct Observation {
+  int frame;
+  int point;
+  Vec2 px;
+  bool inlier = true;
+};
+
+// Least-squares intersection of the rays (origin c, unit direction d): the point closest to all.
+Vec3 intersectRays(const std::vector<Vec3>& c, const std::vector<Vec3>& d) {
+  Mat3 A = Mat3::Zero();
+  Vec3 b = Vec3::Zero();
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const Mat3 P = Mat3::Identity() - d[i] * d[i].transpose();
+    A += P;
+    b += P * c[i];
+  }
+  return A.ldlt().solve(b);
+}
+
+// Covariance of the lens parameters (unit residual variance) from the solved problem, with the other
+// parameters marginalized; the gauge is fixed by the first pose and the baseline term.
+bool lensCovariance(ceres::Problem& problem, const double* proj, const double* dist,
+                    Eigen::Matrix<double, 9, 9>* cov) {
+  ceres::Covariance::Options copts;
+  copts.algorithm_type = ceres::SPARSE_QR;
+  copts.num_threads = 1;  // the lens block touches every residual: two threads mostly wait on its lock
+  ceres::Covariance covariance(copts);
+  std::vector<std::pair<const double*, const double*>> blocks;
+  const bool proj_free = !problem.IsParameterBlockConstant(proj);
+  const bool dist_free = !problem.IsParameterBlockConstant(dist);
+  if (dist_free) blocks.emplace_back(dist, dist);
+  if (proj_free) blocks.emplace_back(proj, proj);
+  if (dist_free && proj_free) blocks.emplace_back(dist, proj);
+  if (blocks.empty() || !covariance.Compute(blocks, &problem)) return false;
+  Eigen::Matrix<double, 5, 5, Eigen::RowMajor> dd = Eigen::Matrix<double, 5, 5, Eigen::RowMajor>::Zero();
+  Eigen::Matrix<double, 4, 4, Eigen::RowMajor> pp = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>::Zero();
+  Eigen::Matrix<double, 5, 4, Eigen::RowMajor> dp = Eigen::Matrix<double, 5, 4, Eigen::RowMajor>::Zero();
+  if (dist_free && !covariance.GetCovarianceBlock(dist, dist, dd.data())) return false;
+  if (proj_free && !covariance.GetCovarianceBlock(proj, proj, pp.data())) return false;
+  if (dist_free && proj_free && !covariance.GetCovarianceBlock(dist, proj, dp.data())) return false;
+  cov->setZero();
+  cov->topLeftCorner<5, 5>() = dd;
+  cov->bottomRightCorner<4, 4>() = pp;
+  cov->topRightCorner<5, 4>() = dp;
+  cov->bottomLeftCorner<4, 5>() = dp.transpose();
+  return cov->allFinite();
+}
+
+// Standard deviation (px, worst direction) of where the lens maps rays through the image border, from the
+// covariance of its parameters: one number for how well the data determine the lens.
+double borderSigmaPx(const CameraModel& cam, const Eigen::Matrix<double, 9, 9>& cov) {
+  double worst = 0;
+  const double w = cam.width - 1, h = cam.height - 1;
+  for (const Vec2 px : {Vec2(0, 0), Vec2(w, 0), Vec2(0, h), Vec2(w, h), Vec2(w / 2, 0), Vec2(0, h / 2),
+                        Vec2(w, h / 2), Vec2(w / 2, h)}) {
+    const Vec3 ray = cam.unproject(px);
+    Eigen::Matrix<double, 2, 9> J;
+    for (int i = 0; i < 9; ++i) {
+      // Numeric derivative of the projection of a fixed ray with respect to each lens parameter.
+      CameraModel a = cam, b = cam;
+      double* pa = i < 5 ? &a.k[i] : (i == 5 ? &a.fx : i == 6 ? &a.fy : i == 7 ? &a.cx : &a.cy);
+      double* pb = i < 5 ? &b.k[i] : (i == 5 ? &b.fx : i == 6 ? &b.fy : i == 7 ? &b.cx : &b.cy);
+      const double step = i < 5 ? 1e-6 : 1e-4;
+      *pa += step, *pb -= step;
+      J.col(i) = (a.project(ray) - b.project(ray)) / (2 * step);
+    }
+    const Eigen::Matrix2d S = J * cov * J.transpose();
+    worst = std::max(
+        worst, std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S).eigenvalues()(1))));
+  }
+  return worst;
+}
+
+}  // namespace
+
+LensRefineResult refineLens(const CameraModel& camera, const std::vector<FeatureTrack>& tracks,
+                            const std::vector<std::optional<SE3>>& T_w_c, const LensRefineConfig& cfg) {
+  cfg.validate();
+  if (camera.distortion != Distortion::kRadTan && camera.distortion != Distortion::kNone)
+    throw std::invalid_argument("lens refinement: only the radtan model is supported (camera is " +
+                                std::string(toString(camera.distortion)) + ")");
+  int first = -1, last = -1;
+  for (int i = 0; i < static_cast<int>(T_w_c.size()); ++i) {
+    if (!T_w_c[i]) continue;
+    if (first < 0) first = i;
+    last = i;
+  }
+  if (first < 0 || first == last)
+    throw std::invalid_argument("lens refinement: needs at least two posed frames");
+  const double baseline = (T_w_c[last]->translation() - T_w_c[first]->translation()).norm();
+  if (!(baseline > 0)) throw std::invalid_argument("lens refinement: the first and last poses coincide");
+
+  // Parameters, stored where Ceres can point at them for the whole solve.
+  std::array<double, 4> proj{camera.fx, camera.fy, camera.cx, camera.cy};
+  std::array<double, 5> dist{};
+  if (camera.distortion == Distortion::kRadTan) dist = camera.k;
+  std::vector<std::array<double, 7>> pose(T_w_c.size());  // T_c_w: qx qy qz qw tx ty tz
+  for (std::size_t i = 0; i < T_w_c.size(); ++i) {
+    if (!T_w_c[i]) continue;
+    const SE3 T_c_w = T_w_c[i]->inverse();
+    const Quat& q = T_c_w.quaternion();
+    pose[i] = {q.x(),
+               q.y(),
+               q.z(),
+               q.w(),
+               T_c_w.translation().x(),
+               T_c_w.translation().y(),
+               T_c_w.translation().z()};
+  }
+
+  // Triangulate each track from its posed observations with the given lens.
+  std::vector<Vec3> points;
+  std::vector<Observation> obs;
+  const double min_cos = std::cos(cfg.min_parallax_deg * M_PI / 180.0);
+  std::vector<Vec3> origins, dirs;
+  for (const FeatureTrack& tr : tracks) {
+    origins.clear();
+    dirs.clear();
+    std::vector<Observation> mine;
+    for (std::size_t j = 0; j < tr.frames.size(); ++j) {
+      const int f = tr.frames[j];
+      if (f < 0 || f >= static_cast<int>(T_w_c.size()) || !T_w_c[f]) continue;
+      const SE3& T = *T_w_c[f];
+      origins.push_back(T.translation());
+      dirs.push_back((T.so3() * camera.unproject(tr.px[j])).normalized());
+      mine.push_back({f, static_cast<int>(points.size()), tr.px[j]});
+    }
+    if (static_cast<int>(mine.size()) < cfg.min_observations) continue;
+    if (dirs.front().dot(dirs.back()) > min_cos) continue;  // too little parallax for a depth
+    const Vec3 X = intersectRays(origins, dirs);
+    bool in_front = X.allFinite();
+    for (const Observation& o : mine) in_front = in_front && (T_w_c[o.frame]->inverse() * X).z() > 0;
+    if (!in_front) continue;
+    points.push_back(X);
+    obs.insert(obs.end(), mine.begin(), mine.end());
+  }
+  constexpr std::size_t kMinTracks = 20;
+  if (points.size() < kMinTracks)
+    throw std::invalid_argument("lens refinement: only " + std::to_string(points.size()) +
+                                " tracks are long enough with enough parallax (need " +
+                                std::to_string(kMinTracks) + ")");
+
+  auto residual = [&](const Observation& o) {
+    const ReprojectionCost cost(o.px);
+    double r[2];
+    if (!cost(pose[o.frame].data(), pose[o.frame].data() + 4, points[o.point].data(), proj.data(),
+              dist.data(), r))
+      return 1e9;
+    return std::hypot(r[0], r[1]);
+  };
+  auto rms = [&]() {
+    double s = 0;
+    std::size_t n = 0;
+    for (const Observation& o : obs) {
+      if (!o.inlier) continue;
+      const double e = residual(o);
+      s += e * e;
+      ++n;
+    }
+    return n ? std::sqrt(s / n) : 0.0;
+  };
+
+  ceres::Solver::Options opts;
+  // A few hundred frames at most: the reduced camera system is small enough to be dense, and the
+  // sparse one is slower here (the lens block couples every frame).
+  opts.linear_solver_type = ceres::DENSE_SCHUR;
+  opts.max_num_iterations = cfg.max_iterations;
+  opts.num_threads = 1;  // the lens block touches every residual: two threads mostly wait on its lock
+  opts.logging_type = ceres::SILENT;
+
+  // lens_cov (if given) receives the covariance of the distortion coefficients (5x5, zero where fixed)
+  // and, when they are refined, of fx fy cx cy; false in *cov_ok if Ceres could not compute it.
+  Eigen::Matrix<double, 9, 9> lens_cov = Eigen::Matrix<double, 9, 9>::Zero();
+  bool cov_ok = false;
+  auto solve = [&](bool lens_free) {
+    ceres::Problem::Options popts;
+    popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(popts);
+    ceres::EigenQuaternionManifold quat;
+    ceres::HuberLoss huber(cfg.huber_px);
+    std::vector<int> used(T_w_c.size(), 0);
+    for (const Observation& o : obs) {
+      if (!o.inlier) continue;
+      auto* cost =
+          new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 4, 3, 3, 4, 5>(new ReprojectionCost(o.px));
+      problem.AddResidualBlock(cost, &huber, pose[o.frame].data(), pose[o.frame].data() + 4,
+                               points[o.point].data(), proj.data(), dist.data());
+      if (!used[o.frame]) problem.SetManifold(pose[o.frame].data(), &quat);
+      used[o.frame] = 1;
+    }
+    if (used[first]) {
+      problem.SetParameterBlockConstant(pose[first].data());
+      problem.SetParameterBlockConstant(pose[first].data() + 4);
+    }
+    if (used[last]) {
+      const Vec3 c0 = T_w_c[first]->translation();
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<BaselineCost, 1, 4, 3>(new BaselineCost(c0, baseline)), nullptr,
+          pose[last].data(), pose[last].data() + 4);
+    }
+    std::vector<int> fixed_dist;
+    if (!lens_free || !cfg.refine_radial) fixed_dist.insert(fixed_dist.end(), {0, 1});
+    if (!lens_free || !cfg.refine_tangential) fixed_dist.insert(fixed_dist.end(), {2, 3});
+    if (!lens_free || !cfg.refine_k3) fixed_dist.push_back(4);
+    std::unique_ptr<ceres::SubsetManifold> subset;
+    if (fixed_dist.size() == 5) {
+      problem.SetParameterBlockConstant(dist.data());
+    } else if (!fixed_dist.empty()) {
+      subset = std::make_unique<ceres::SubsetManifold>(5, fixed_dist);
+      problem.SetManifold(dist.data(), subset.get());
+    }
+    if (!lens_free || !cfg.refine_projection) problem.SetParameterBlockConstant(proj.data());
+    ceres::Solver::Summary summary;
+    ceres::Solve(opts, &problem, &summary);
+    if (lens_free) cov_ok = lensCovariance(problem, proj.data(), dist.data(), &lens_cov);
+    return summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
+  };
+
+  // 1. Poses and points with the given lens; drop what it cannot explain.
+  solve(false);
+  for (Observation& o : obs) o.inlier = residual(o) <= cfg.outlier_px;
+  std::vector<int> count(points.size(), 0);
+  for (const Observation& o : obs) count[o.point] += o.inlier;
+  for (Observation& o : obs) o.inlier = o.inlier && count[o.point] >= cfg.min_observations;
+  solve(false);  // again without the outliers: the fair baseline for the refined lens
+  LensRefineResult res;
+  res.rms_fixed_px = rms();
+  // 2. Everything, lens included.
+  res.converged = solve(true);
+  res.rms_refined_px = rms();
+  for (const Observation& o : obs) res.observations += o.inlier;
+  for (int c : count) res.tracks_used += c >= cfg.min_observations;
+
+  res.camera = camera;
+  res.camera.distortion = Distortion::kRadTan;
+  res.camera.k = dist;
+  res.camera.fx = proj[0], res.camera.fy = proj[1], res.camera.cx = proj[2], res.camera.cy = proj[3];
+  if (cov_ok) {
+    // Scale to the residuals' variance: the covariance above assumes 1 px.
+    res.lens_sigma_px = borderSigmaPx(res.camera, lens_cov * res.rms_refined_px * res.rms_refined_px);
+    for (int i = 0; i < 5; ++i)
+      res.k_sigma[i] = std::sqrt(std::max(0.0, lens_cov(i, i))) * res.rms_refined_px;
+  }
+  res.T_w_c.resize(T_w_c.size());
+  for (std::size_t i = 0; i < T_w_c.size(); ++i) {
+    if (!T_w_c[i]) continue;
+    const Quat q(pose[i][3], pose[i][0], pose[i][1], pose[i][2]);
+    res.T_w_c[i] = SE3(q.normalized(), Vec3(pose[i][4], pose[i][5], pose[i][6])).inverse();
+  }
+  return res;
+}
+
+}  // namespace eds

@@ -1,0 +1,70 @@
+#pragma once
+// Lens self-calibration from feature tracks: a bundle adjustment over all frames (poses, points and
+// the lens) in raw pixels, with Ceres. Direct odometry cannot do this inside its window (7 keyframes
+// over a few centimetres: each point's depth absorbs the lens error), but a track that crosses the image
+// pins the lens down: under motion, its raw pixels must be the projection of one 3D point. On the real
+// ECD slider the given k1 leaves a 4-5 deg yaw drift; see README "Lens self-calibration".
+#include <array>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/feature_tracks.hpp"
+#include "core/camera.hpp"
+#include "core/se3.hpp"
+
+namespace eds {
+
+struct LensRefineConfig {
+  bool refine_radial = true;       // k1, k2
+  bool refine_k3 = false;          // rarely observable on small sensors
+  bool refine_tangential = false;  // p1, p2
+  // fx, fy, cx, cy. Off by default: a mostly translating camera does not observe them (a pure
+  // translation maps straight lines through the focus of expansion to straight lines for any fx).
+  bool refine_projection = false;
+  double huber_px = 1.0;          // robust loss on the reprojection error
+  double outlier_px = 3.0;        // observations off by more after the fixed-lens solve are dropped
+  double min_parallax_deg = 1.0;  // tracks whose rays span less are not used (no depth)
+  int min_observations = 5;       // per track, after outlier removal
+  int max_iterations = 100;
+
+  // std::invalid_argument naming the offending parameter if out of range.
+  void validate() const;
+};
+
+struct LensRefineResult {
+  CameraModel camera;  // the refined lens (the input's size and model)
+  std::size_t tracks_used = 0;
+  std::size_t observations = 0;
+  double rms_fixed_px = 0;    // reprojection RMS with the given lens (poses and points optimized)
+  double rms_refined_px = 0;  // with the refined lens
+  bool converged = false;
+  // How well the data determine the lens: the standard deviation of the refined lens's projection at
+  // the image border (worst of corners and edge midpoints, px), from the solution's covariance; NaN
+  // when Ceres could not compute it. Well above the tracks' noise per observation, the refined lens is
+  // a guess: keep the given one (see `eds calibrate`).
+  double lens_sigma_px = std::numeric_limits<double>::quiet_NaN();
+  std::array<double, 5> k_sigma{};        // standard deviations of k1 k2 p1 p2 k3 (0 where fixed)
+  std::vector<std::optional<SE3>> T_w_c;  // refined poses (scale as given)
+};
+
+// Refines the radtan lens of `camera` from `tracks` (raw pixels, indices into `T_w_c`). `T_w_c` is an
+// initial pose per frame (from a first odometry pass; nullopt where there is none: observations there are
+// unused); any scale. The first posed frame and the distance from it to the last posed frame fix the
+// gauge. Throws std::invalid_argument if the camera is not radtan (or undistorted), there are fewer
+// than two posed frames, or too few usable tracks (fewer than 20).
+LensRefineResult refineLens(const CameraModel& camera, const std::vector<FeatureTrack>& tracks,
+                            const std::vector<std::optional<SE3>>& T_w_c, const LensRefineConfig& cfg);
+
+// The radtan distortion (OpenCV's model: k1 k2 p1 p2 k3) of the normalized point (x, y), generic in
+// the scalar so that Ceres can differentiate it; k holds k1 k2 p1 p2 k3.
+template <typename T>
+void distortRadTan(const T* k, const T& x, const T& y, T* xd, T* yd) {
+  const T r2 = x * x + y * y;
+  const T radial = T(1) + r2 * (k[0] + r2 * (k[1] + r2 * k[4]));
+  *xd = x * radial + T(2) * k[2] * x * y + k[3] * (r2 + T(2) * x * x);
+  *yd = y * radial + k[2] * (r2 + T(2) * y * y) + T(2) * k[3] * x * y;
+}
+
+}  // namespace eds
