@@ -82,6 +82,11 @@ void addTrackCommand(CLI::App& app) {
   cmd->add_flag(
       "!--no-frame-refine", a->cfg.refine_keyframes,
       "Keyframe poses from events only (default: refined by aligning the frame to the previous keyframe)");
+  cmd->add_option(
+         "--min-correlation-ratio", a->cfg.min_correlation_ratio,
+         "Lost track when an event frame's correlation falls below this fraction of its recent median "
+         "(0: off)")
+      ->capture_default_str();
   cmd->add_flag("!--no-reversal-compensation", a->cfg.event_frame.reversal_compensation,
                 "Event frames without the events a DVS loses at each brightness turn put back");
   cmd->add_option("--compensation-lookahead", a->cfg.event_frame.compensation_lookahead,

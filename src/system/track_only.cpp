@@ -1,6 +1,7 @@
 #include "system/track_only.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -104,6 +105,8 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   const auto wall0 = Clock::now();
   cfg.event_frame.validate();
   cfg.points.validate();
+  if (!(cfg.min_correlation_ratio >= 0 && cfg.min_correlation_ratio < 1))
+    throw std::invalid_argument("min_correlation_ratio must be in [0, 1) (0: no lost-track check)");
   if (!seq.hasFrames())
     throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
   const Trajectory gt = seq.groundTruth();
@@ -141,6 +144,9 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   SE3 T_prev;
   TimeNs t_prev = -1, t_last = -1;
   bool need_keyframe = false, lost = false;
+  // Correlations of the event frames tracked on this keyframe (the lost-track check's reference).
+  constexpr std::size_t kRecent = 5;
+  std::vector<double> recent_corr;
   TimeNs first_ef_t = -1, last_ef_t = -1;
 
   while (packets.next(events, begin)) {
@@ -160,9 +166,10 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
       if (f != kf_frame) {
         SE3 T_w_kf_new = poseAt(res.trajectory, frames[f].t);
         const cv::Mat img = builder.image(f);
-        if (cfg.refine_keyframes && !lost) {
+        if (cfg.refine_keyframes) {
           // The frame aligned to the old keyframe, seeded by the event pose: frames are sharper than
-          // event frames, so this removes most of the error a keyframe hand-over would pass on.
+          // event frames, so this removes most of the error a keyframe hand-over would pass on. After a
+          // lost track the seed is the last good pose, and the alignment is what recovers.
           SE3 T_f_kf = T_w_kf_new.inverse() * kf.T_w_kf;
           double alpha = 1.0, beta = 0.0;
           const auto t0 = Clock::now();
@@ -192,6 +199,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
         if (lost) nu.setZero();
         t_prev = t_last = -1;
         need_keyframe = lost = false;
+        recent_corr.clear();
       }
     }
 
@@ -215,12 +223,25 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
       std::snprintf(name, sizeof name, "ef_%06zu.png", res.event_frames - 1);
       cv::imwrite((cfg.debug_dir / name).string(), both);
     }
-    if (!tr.ok) {
-      res.failures.push_back({ef.t, tr.failure});
+    // Lost-track check: correlation far below its recent level on this keyframe.
+    std::string failure = tr.failure;
+    if (tr.ok && cfg.min_correlation_ratio > 0 && recent_corr.size() >= 3) {
+      std::array<double, kRecent> sorted{};
+      const std::size_t n = std::min(recent_corr.size(), kRecent);
+      std::copy(recent_corr.end() - static_cast<std::ptrdiff_t>(n), recent_corr.end(), sorted.begin());
+      std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
+      if (tr.correlation < cfg.min_correlation_ratio * sorted[n / 2])
+        failure = "correlation " + std::to_string(tr.correlation) + " fell below " +
+                  std::to_string(cfg.min_correlation_ratio) + " of its recent median " +
+                  std::to_string(sorted[n / 2]);
+    }
+    if (!failure.empty()) {
+      res.failures.push_back({ef.t, failure});
       need_keyframe = lost = true;  // go on from the next keyframe
       continue;
     }
     ++res.tracked;
+    recent_corr.push_back(tr.correlation);
     T_prev = T_ef_kf;
     t_prev = t_last;
     T_ef_kf = T_est;
