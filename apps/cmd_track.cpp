@@ -87,6 +87,10 @@ void addTrackCommand(CLI::App& app) {
          "Lost track when an event frame's correlation falls below this fraction of its recent median "
          "(0: off)")
       ->capture_default_str();
+  cmd->add_option(
+         "--max-cost-ratio", a->cfg.max_cost_ratio,
+         "Lost track when an event frame's cost rises above this multiple of its recent median (0: off)")
+      ->capture_default_str();
   cmd->add_flag("!--no-reversal-compensation", a->cfg.event_frame.reversal_compensation,
                 "Event frames without the events a DVS loses at each brightness turn put back");
   cmd->add_option("--compensation-lookahead", a->cfg.event_frame.compensation_lookahead,

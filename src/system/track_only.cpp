@@ -99,6 +99,16 @@ double medianDepth(const Keyframe& kf) {
   return z[z.size() / 2];
 }
 
+// Median of the last five values (fewer when there are fewer).
+double recentMedian(const std::vector<double>& v) {
+  constexpr std::size_t kRecent = 5;
+  std::array<double, kRecent> last{};
+  const std::size_t n = std::min(v.size(), kRecent);
+  std::copy(v.end() - static_cast<std::ptrdiff_t>(n), v.end(), last.begin());
+  std::nth_element(last.begin(), last.begin() + n / 2, last.begin() + n);
+  return last[n / 2];
+}
+
 }  // namespace
 
 TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
@@ -107,6 +117,8 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   cfg.points.validate();
   if (!(cfg.min_correlation_ratio >= 0 && cfg.min_correlation_ratio < 1))
     throw std::invalid_argument("min_correlation_ratio must be in [0, 1) (0: no lost-track check)");
+  if (!(cfg.max_cost_ratio == 0 || cfg.max_cost_ratio > 1))
+    throw std::invalid_argument("max_cost_ratio must be 0 (off) or > 1");
   if (!seq.hasFrames())
     throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
   const Trajectory gt = seq.groundTruth();
@@ -145,8 +157,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   TimeNs t_prev = -1, t_last = -1;
   bool need_keyframe = false, lost = false;
   // Correlations of the event frames tracked on this keyframe (the lost-track check's reference).
-  constexpr std::size_t kRecent = 5;
-  std::vector<double> recent_corr;
+  std::vector<double> recent_corr, recent_cost;
   TimeNs first_ef_t = -1, last_ef_t = -1;
 
   while (packets.next(events, begin)) {
@@ -200,6 +211,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
         t_prev = t_last = -1;
         need_keyframe = lost = false;
         recent_corr.clear();
+        recent_cost.clear();
       }
     }
 
@@ -223,17 +235,18 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
       std::snprintf(name, sizeof name, "ef_%06zu.png", res.event_frames - 1);
       cv::imwrite((cfg.debug_dir / name).string(), both);
     }
-    // Lost-track check: correlation far below its recent level on this keyframe.
+    // Lost-track check: correlation far below, or cost far above, their recent level on this keyframe.
     std::string failure = tr.failure;
-    if (tr.ok && cfg.min_correlation_ratio > 0 && recent_corr.size() >= 3) {
-      std::array<double, kRecent> sorted{};
-      const std::size_t n = std::min(recent_corr.size(), kRecent);
-      std::copy(recent_corr.end() - static_cast<std::ptrdiff_t>(n), recent_corr.end(), sorted.begin());
-      std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
-      if (tr.correlation < cfg.min_correlation_ratio * sorted[n / 2])
+    if (tr.ok && recent_corr.size() >= 3) {
+      const double corr_ref = recentMedian(recent_corr);
+      const double cost_ref = recentMedian(recent_cost);
+      if (cfg.min_correlation_ratio > 0 && tr.correlation < cfg.min_correlation_ratio * corr_ref)
         failure = "correlation " + std::to_string(tr.correlation) + " fell below " +
                   std::to_string(cfg.min_correlation_ratio) + " of its recent median " +
-                  std::to_string(sorted[n / 2]);
+                  std::to_string(corr_ref);
+      else if (cfg.max_cost_ratio > 0 && tr.cost > cfg.max_cost_ratio * cost_ref)
+        failure = "cost " + std::to_string(tr.cost) + " rose above " + std::to_string(cfg.max_cost_ratio) +
+                  " times its recent median " + std::to_string(cost_ref);
     }
     if (!failure.empty()) {
       res.failures.push_back({ef.t, failure});
@@ -242,6 +255,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
     }
     ++res.tracked;
     recent_corr.push_back(tr.correlation);
+    recent_cost.push_back(tr.cost);
     T_prev = T_ef_kf;
     t_prev = t_last;
     T_ef_kf = T_est;

@@ -32,12 +32,13 @@ struct TrackOnlyConfig {
   // A new keyframe's pose: the event pose at its frame's time, refined by aligning the frame to the
   // previous keyframe (on by default; off = event poses only).
   bool refine_keyframes = true;
-  // Lost-track check: an event frame whose correlation n̂·n falls below this fraction of the median of
-  // the last five on its keyframe is a failure (the pose is not kept; tracking goes on from the next
-  // keyframe). A fixed floor cannot tell: a good run on the simulated desk has 93 of 536 event frames
-  // below 0.85, but its correlation never drops below 0.9 of its recent median; a diverging one drops to
-  // 0.37 of it. 0 turns the check off.
+  // Lost-track check against the median of the last five event frames on the same keyframe: an event
+  // frame whose correlation n̂·n falls below min_correlation_ratio of it, or whose cost rises above
+  // max_cost_ratio times it, is a failure (its pose is not kept; the next keyframe's frame is aligned
+  // from the last good pose). A fixed floor cannot tell: a good run on the simulated desk has 93 of 536
+  // event frames below 0.85. 0 turns a check off.
   double min_correlation_ratio = 0.75;
+  double max_cost_ratio = 2.0;
   double depth_noise = 0.0;  // sigma of additive depth noise, as a fraction of the median depth
   // > 0: median-filter keyframe inverse depths over this radius (px). Noisy depth attenuates the
   // tracker's translation (errors in the regressor); with 10% noise on the ESIM plane the ATE is 15 cm

@@ -73,15 +73,16 @@ TEST(TrackOnly, UntrackableEventsAreReportedAndTrackingResumes) {
 }
 
 // Four events in five replaced by noise: the correlation sinks but stays above the absolute floor (0.2),
-// so only the relative lost-track check reports it (half the events is not enough for either).
-TEST(TrackOnly, ACorrelationDropIsALostTrack) {
+// so only the relative lost-track checks report it (half the events is not enough for any).
+TEST(TrackOnly, ASuddenDropIsALostTrack) {
   const auto dir = noisySequence("track_drop", 0.8);
   const Sequence seq(dir);
   TrackOnlyConfig off;
   off.min_correlation_ratio = 0;
+  off.max_cost_ratio = 0;
   const TrackOnlyResult r_off = runTrackOnly(seq, off);
   const TrackOnlyResult r_on = runTrackOnly(seq, TrackOnlyConfig{});
-  std::printf("[ correlation drop ] failures: %zu with the check off, %zu on\n", r_off.failures.size(),
+  std::printf("[ sudden drop ] failures: %zu with the check off, %zu on\n", r_off.failures.size(),
               r_on.failures.size());
   EXPECT_TRUE(r_off.failures.empty());
   ASSERT_FALSE(r_on.failures.empty());
@@ -91,6 +92,17 @@ TEST(TrackOnly, ACorrelationDropIsALostTrack) {
     EXPECT_NE(f.reason.find("recent median"), std::string::npos) << f.reason;
   }
   EXPECT_GT(toSeconds(r_on.trajectory.back().t), 1.1) << "tracking did not go on after the failures";
+  // Each check alone catches it.
+  TrackOnlyConfig cost_only;
+  cost_only.min_correlation_ratio = 0;
+  const TrackOnlyResult r_cost = runTrackOnly(seq, cost_only);
+  ASSERT_FALSE(r_cost.failures.empty());
+  EXPECT_EQ(r_cost.failures.front().reason.rfind("cost ", 0), 0u) << r_cost.failures.front().reason;
+  TrackOnlyConfig corr_only;
+  corr_only.max_cost_ratio = 0;
+  const TrackOnlyResult r_corr = runTrackOnly(seq, corr_only);
+  ASSERT_FALSE(r_corr.failures.empty());
+  EXPECT_EQ(r_corr.failures.front().reason.rfind("correlation ", 0), 0u) << r_corr.failures.front().reason;
 }
 
 }  // namespace
