@@ -67,6 +67,9 @@ void runCalibrate(CalibrateArgs& a) {
   j["rms_refined_px"] = r.rms_refined_px;
   j["converged"] = r.converged;
   j["lens_sigma_px"] = std::isfinite(r.lens_sigma_px) ? nlohmann::json(r.lens_sigma_px) : nlohmann::json();
+  j["lens_sigma_covariance_px"] =
+      std::isfinite(r.lens_sigma_cov_px) ? nlohmann::json(r.lens_sigma_cov_px) : nlohmann::json();
+  j["lens_sigma_split_px"] = r.lens_sigma_split_px;
   j["k_sigma"] = r.k_sigma;
   const bool determined = std::isfinite(r.lens_sigma_px) && r.lens_sigma_px <= a.max_sigma_px;
   j["determined"] = determined;
@@ -81,8 +84,11 @@ void runCalibrate(CalibrateArgs& a) {
               r.camera.k[2], r.camera.k[3], r.camera.k[4]);
   std::printf("               sigma   %.5f %.5f %.6f %.6f %.5f\n", r.k_sigma[0], r.k_sigma[1], r.k_sigma[2],
               r.k_sigma[3], r.k_sigma[4]);
+  std::printf(
+      "lens uncertainty at the image border: %.2f px from the covariance, %.2f px from %d groups of tracks\n",
+      r.lens_sigma_cov_px, r.lens_sigma_split_px, a.cfg.refine.split_groups);
   if (!std::isfinite(r.lens_sigma_px))
-    std::printf("warning: the covariance could not be computed: the refined lens is unchecked\n");
+    std::printf("warning: the lens's uncertainty could not be computed: the refined lens is unchecked\n");
   else if (!determined)
     std::printf(
         "warning: the refined lens is uncertain by %.2f px at the image border (more than %.2f px): this\n"

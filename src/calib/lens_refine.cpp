@@ -20,6 +20,8 @@ void LensRefineConfig::validate() const {
   need(min_parallax_deg >= 0 && min_parallax_deg < 90, "min_parallax_deg must be in [0, 90)");
   need(min_observations >= 2, "min_observations must be >= 2");
   need(max_iterations > 0, "max_iterations must be positive");
+  need(split_groups == 0 || (split_groups >= 2 && split_groups <= 16),
+       "split_groups must be 0 or in [2, 16]");
 }
 
 namespace {
@@ -105,13 +107,18 @@ bool lensCovariance(ceres::Problem& problem, const double* proj, const double* d
   return cov->allFinite();
 }
 
+// The image border's corners and edge midpoints, where a lens error shows most.
+std::array<Vec2, 8> borderPixels(const CameraModel& cam) {
+  const double w = cam.width - 1, h = cam.height - 1;
+  return {Vec2(0, 0),     Vec2(w, 0),     Vec2(0, h),     Vec2(w, h),
+          Vec2(w / 2, 0), Vec2(0, h / 2), Vec2(w, h / 2), Vec2(w / 2, h)};
+}
+
 // Standard deviation (px, worst direction) of where the lens maps rays through the image border, from the
 // covariance of its parameters: one number for how well the data determine the lens.
 double borderSigmaPx(const CameraModel& cam, const Eigen::Matrix<double, 9, 9>& cov) {
   double worst = 0;
-  const double w = cam.width - 1, h = cam.height - 1;
-  for (const Vec2 px : {Vec2(0, 0), Vec2(w, 0), Vec2(0, h), Vec2(w, h), Vec2(w / 2, 0), Vec2(0, h / 2),
-                        Vec2(w, h / 2), Vec2(w / 2, h)}) {
+  for (const Vec2& px : borderPixels(cam)) {
     const Vec3 ray = cam.unproject(px);
     Eigen::Matrix<double, 2, 9> J;
     for (int i = 0; i < 9; ++i) {
@@ -131,6 +138,15 @@ double borderSigmaPx(const CameraModel& cam, const Eigen::Matrix<double, 9, 9>& 
 }
 
 }  // namespace
+
+double lensBorderDifferencePx(const CameraModel& a, const CameraModel& b) {
+  double worst = 0;
+  for (const Vec2& px : borderPixels(a)) {
+    const Vec3 ray = a.unproject(px);
+    worst = std::max(worst, (a.project(ray) - b.project(ray)).norm());
+  }
+  return worst;
+}
 
 LensRefineResult refineLens(const CameraModel& camera, const std::vector<FeatureTrack>& tracks,
                             const std::vector<std::optional<SE3>>& T_w_c, const LensRefineConfig& cfg) {
@@ -231,7 +247,8 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   // and, when they are refined, of fx fy cx cy; false in *cov_ok if Ceres could not compute it.
   Eigen::Matrix<double, 9, 9> lens_cov = Eigen::Matrix<double, 9, 9>::Zero();
   bool cov_ok = false;
-  auto solve = [&](bool lens_free) {
+  // group >= 0: only the tracks of that group (point index modulo cfg.split_groups), no covariance.
+  auto solve = [&](bool lens_free, int group) {
     ceres::Problem::Options popts;
     popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -240,7 +257,7 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
     ceres::HuberLoss huber(cfg.huber_px);
     std::vector<int> used(T_w_c.size(), 0);
     for (const Observation& o : obs) {
-      if (!o.inlier) continue;
+      if (!o.inlier || (group >= 0 && o.point % cfg.split_groups != group)) continue;
       auto* cost =
           new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 4, 3, 3, 4, 5>(new ReprojectionCost(o.px));
       problem.AddResidualBlock(cost, &huber, pose[o.frame].data(), pose[o.frame].data() + 4,
@@ -272,21 +289,21 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
     if (!lens_free || !cfg.refine_projection) problem.SetParameterBlockConstant(proj.data());
     ceres::Solver::Summary summary;
     ceres::Solve(opts, &problem, &summary);
-    if (lens_free) cov_ok = lensCovariance(problem, proj.data(), dist.data(), &lens_cov);
+    if (lens_free && group < 0) cov_ok = lensCovariance(problem, proj.data(), dist.data(), &lens_cov);
     return summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
   };
 
   // 1. Poses and points with the given lens; drop what it cannot explain.
-  solve(false);
+  solve(false, -1);
   for (Observation& o : obs) o.inlier = residual(o) <= cfg.outlier_px;
   std::vector<int> count(points.size(), 0);
   for (const Observation& o : obs) count[o.point] += o.inlier;
   for (Observation& o : obs) o.inlier = o.inlier && count[o.point] >= cfg.min_observations;
-  solve(false);  // again without the outliers: the fair baseline for the refined lens
+  solve(false, -1);  // again without the outliers: the fair baseline for the refined lens
   LensRefineResult res;
   res.rms_fixed_px = rms();
   // 2. Everything, lens included.
-  res.converged = solve(true);
+  res.converged = solve(true, -1);
   res.rms_refined_px = rms();
   for (const Observation& o : obs) res.observations += o.inlier;
   for (int c : count) res.tracks_used += c >= cfg.min_observations;
@@ -297,9 +314,35 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   res.camera.fx = proj[0], res.camera.fy = proj[1], res.camera.cx = proj[2], res.camera.cy = proj[3];
   if (cov_ok) {
     // Scale to the residuals' variance: the covariance above assumes 1 px.
-    res.lens_sigma_px = borderSigmaPx(res.camera, lens_cov * res.rms_refined_px * res.rms_refined_px);
+    res.lens_sigma_cov_px = borderSigmaPx(res.camera, lens_cov * res.rms_refined_px * res.rms_refined_px);
+    res.lens_sigma_px = res.lens_sigma_cov_px;
     for (int i = 0; i < 5; ++i)
       res.k_sigma[i] = std::sqrt(std::max(0.0, lens_cov(i, i))) * res.rms_refined_px;
+  }
+  if (cfg.split_groups > 1) {
+    // Repeatability: the lens from each of the disjoint groups of tracks, from the full solution. Errors
+    // along a track are correlated (each position is tracked from the last), which the covariance
+    // (independent errors) does not see; whole tracks per group, this spread does.
+    const auto pose0 = pose;
+    const auto points0 = points;
+    const auto proj0 = proj;
+    const auto dist0 = dist;
+    double sum2 = 0;
+    for (int g = 0; g < cfg.split_groups; ++g) {
+      solve(true, g);
+      CameraModel cg = res.camera;
+      cg.k = dist;
+      cg.fx = proj[0], cg.fy = proj[1], cg.cx = proj[2], cg.cy = proj[3];
+      const double d = lensBorderDifferencePx(res.camera, cg);
+      sum2 += d * d;
+      pose = pose0, points = points0, proj = proj0, dist = dist0;
+    }
+    // Each group holds 1/K of the tracks: the full set's spread is the groups' over sqrt(K).
+    const double K = cfg.split_groups;
+    res.lens_sigma_split_px = std::sqrt(sum2 / (K * (K - 1)));
+    res.lens_sigma_px = std::isfinite(res.lens_sigma_cov_px)
+                            ? std::max(res.lens_sigma_cov_px, res.lens_sigma_split_px)
+                            : res.lens_sigma_split_px;
   }
   res.T_w_c.resize(T_w_c.size());
   for (std::size_t i = 0; i < T_w_c.size(); ++i) {

@@ -28,6 +28,9 @@ struct LensRefineConfig {
   double min_parallax_deg = 1.0;  // tracks whose rays span less are not used (no depth)
   int min_observations = 5;       // per track, after outlier removal
   int max_iterations = 100;
+  // The tracks are also split into this many groups, each refined alone, for a second estimate of the
+  // lens's uncertainty that sees errors correlated along a track (0: skip; costs about one more solve).
+  int split_groups = 4;
 
   // std::invalid_argument naming the offending parameter if out of range.
   void validate() const;
@@ -40,11 +43,15 @@ struct LensRefineResult {
   double rms_fixed_px = 0;    // reprojection RMS with the given lens (poses and points optimized)
   double rms_refined_px = 0;  // with the refined lens
   bool converged = false;
-  // How well the data determine the lens: the standard deviation of the refined lens's projection at
-  // the image border (worst of corners and edge midpoints, px), from the solution's covariance; NaN
-  // when Ceres could not compute it. Well above the tracks' noise per observation, the refined lens is
-  // a guess: keep the given one (see `eds calibrate`).
+  // How well the data determine the lens, as the standard deviation of the refined lens's projection at
+  // the image border (worst of corners and edge midpoints, px): the larger of two estimates, NaN when
+  // there is neither. Well above the tracks' noise per observation, the refined lens is a guess: keep
+  // the given one (see `eds calibrate`).
   double lens_sigma_px = std::numeric_limits<double>::quiet_NaN();
+  // From the solution's covariance (independent errors assumed); NaN if Ceres could not compute it.
+  double lens_sigma_cov_px = std::numeric_limits<double>::quiet_NaN();
+  // From the spread of the lenses refined on split_groups disjoint groups of tracks (0 if not run).
+  double lens_sigma_split_px = 0;
   std::array<double, 5> k_sigma{};        // standard deviations of k1 k2 p1 p2 k3 (0 where fixed)
   std::vector<std::optional<SE3>> T_w_c;  // refined poses (scale as given)
 };
@@ -56,6 +63,10 @@ struct LensRefineResult {
 // than two posed frames, or too few usable tracks (fewer than 20).
 LensRefineResult refineLens(const CameraModel& camera, const std::vector<FeatureTrack>& tracks,
                             const std::vector<std::optional<SE3>>& T_w_c, const LensRefineConfig& cfg);
+
+// Largest distance (px) between where lenses a and b project the rays through a's border pixels (corners
+// and edge midpoints): the scale on which lens_sigma_px is given.
+double lensBorderDifferencePx(const CameraModel& a, const CameraModel& b);
 
 // The radtan distortion (OpenCV's model: k1 k2 p1 p2 k3) of the normalized point (x, y), generic in
 // the scalar so that Ceres can differentiate it; k holds k1 k2 p1 p2 k3.
