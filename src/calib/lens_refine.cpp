@@ -1,6 +1,7 @@
 #include "calib/lens_refine.hpp"
 
 #include <ceres/ceres.h>
+#include <ceres/product_manifold.h>
 
 #include <Eigen/Dense>
 #include <array>
@@ -26,19 +27,24 @@ void LensRefineConfig::validate() const {
 
 namespace {
 
-// Raw-pixel reprojection error of a world point seen by a camera with pose T_c_w = (q, t).
+// Parameter blocks: a pose T_c_w as qx qy qz qw tx ty tz (one block: the Schur eliminator is much faster
+// with two camera-side blocks per residual than with four), and the lens as k1 k2 p1 p2 k3 fx fy cx cy.
+using PoseBlock = std::array<double, 7>;
+using LensBlock = std::array<double, 9>;
+
+// Raw-pixel reprojection error of a world point seen by a camera with pose T_c_w.
 struct ReprojectionCost {
   explicit ReprojectionCost(const Vec2& obs) : obs_(obs) {}
   template <typename T>
-  bool operator()(const T* q, const T* t, const T* p_w, const T* proj, const T* dist, T* r) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q_c_w(q);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_c_w(t), point(p_w);
+  bool operator()(const T* pose, const T* p_w, const T* lens, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_c_w(pose);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_c_w(pose + 4), point(p_w);
     const Eigen::Matrix<T, 3, 1> p_c = q_c_w * point + t_c_w;
     if (p_c.z() <= T(1e-9)) return false;  // behind the camera: the step is rejected
     T xd, yd;
-    distortRadTan(dist, p_c.x() / p_c.z(), p_c.y() / p_c.z(), &xd, &yd);
-    r[0] = proj[0] * xd + proj[2] - T(obs_.x());
-    r[1] = proj[1] * yd + proj[3] - T(obs_.y());
+    distortRadTan(lens, p_c.x() / p_c.z(), p_c.y() / p_c.z(), &xd, &yd);
+    r[0] = lens[5] * xd + lens[7] - T(obs_.x());
+    r[1] = lens[6] * yd + lens[8] - T(obs_.y());
     return true;
   }
   Vec2 obs_;
@@ -48,9 +54,9 @@ struct ReprojectionCost {
 struct BaselineCost {
   BaselineCost(const Vec3& c0, double d0) : c0_(c0), d0_(d0) {}
   template <typename T>
-  bool operator()(const T* q, const T* t, T* r) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> q_c_w(q);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_c_w(t);
+  bool operator()(const T* pose, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_c_w(pose);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_c_w(pose + 4);
     const Eigen::Matrix<T, 3, 1> c = -(q_c_w.conjugate() * t_c_w);
     r[0] = T(100) * ((c - c0_.cast<T>()).norm() - T(d0_)) / T(d0_);
     return true;
@@ -80,30 +86,17 @@ Vec3 intersectRays(const std::vector<Vec3>& c, const std::vector<Vec3>& d) {
 
 // Covariance of the lens parameters (unit residual variance) from the solved problem, with the other
 // parameters marginalized; the gauge is fixed by the first pose and the baseline term.
-bool lensCovariance(ceres::Problem& problem, const double* proj, const double* dist,
-                    Eigen::Matrix<double, 9, 9>* cov) {
+bool lensCovariance(ceres::Problem& problem, const double* lens, Eigen::Matrix<double, 9, 9>* cov) {
+  if (problem.IsParameterBlockConstant(lens)) return false;
   ceres::Covariance::Options copts;
   copts.algorithm_type = ceres::SPARSE_QR;
-  copts.num_threads = 1;  // the lens block touches every residual: two threads mostly wait on its lock
+  copts.num_threads = 2;
   ceres::Covariance covariance(copts);
-  std::vector<std::pair<const double*, const double*>> blocks;
-  const bool proj_free = !problem.IsParameterBlockConstant(proj);
-  const bool dist_free = !problem.IsParameterBlockConstant(dist);
-  if (dist_free) blocks.emplace_back(dist, dist);
-  if (proj_free) blocks.emplace_back(proj, proj);
-  if (dist_free && proj_free) blocks.emplace_back(dist, proj);
-  if (blocks.empty() || !covariance.Compute(blocks, &problem)) return false;
-  Eigen::Matrix<double, 5, 5, Eigen::RowMajor> dd = Eigen::Matrix<double, 5, 5, Eigen::RowMajor>::Zero();
-  Eigen::Matrix<double, 4, 4, Eigen::RowMajor> pp = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>::Zero();
-  Eigen::Matrix<double, 5, 4, Eigen::RowMajor> dp = Eigen::Matrix<double, 5, 4, Eigen::RowMajor>::Zero();
-  if (dist_free && !covariance.GetCovarianceBlock(dist, dist, dd.data())) return false;
-  if (proj_free && !covariance.GetCovarianceBlock(proj, proj, pp.data())) return false;
-  if (dist_free && proj_free && !covariance.GetCovarianceBlock(dist, proj, dp.data())) return false;
-  cov->setZero();
-  cov->topLeftCorner<5, 5>() = dd;
-  cov->bottomRightCorner<4, 4>() = pp;
-  cov->topRightCorner<5, 4>() = dp;
-  cov->bottomLeftCorner<4, 5>() = dp.transpose();
+  const std::vector<std::pair<const double*, const double*>> blocks{{lens, lens}};
+  if (!covariance.Compute(blocks, &problem)) return false;
+  Eigen::Matrix<double, 9, 9, Eigen::RowMajor> c;
+  if (!covariance.GetCovarianceBlock(lens, lens, c.data())) return false;
+  *cov = c;  // ambient: zero rows and columns where the lens is held
   return cov->allFinite();
 }
 
@@ -166,10 +159,9 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   if (!(baseline > 0)) throw std::invalid_argument("lens refinement: the first and last poses coincide");
 
   // Parameters, stored where Ceres can point at them for the whole solve.
-  std::array<double, 4> proj{camera.fx, camera.fy, camera.cx, camera.cy};
-  std::array<double, 5> dist{};
-  if (camera.distortion == Distortion::kRadTan) dist = camera.k;
-  std::vector<std::array<double, 7>> pose(T_w_c.size());  // T_c_w: qx qy qz qw tx ty tz
+  LensBlock lens{0, 0, 0, 0, 0, camera.fx, camera.fy, camera.cx, camera.cy};
+  if (camera.distortion == Distortion::kRadTan) std::copy(camera.k.begin(), camera.k.end(), lens.begin());
+  std::vector<PoseBlock> pose(T_w_c.size());
   for (std::size_t i = 0; i < T_w_c.size(); ++i) {
     if (!T_w_c[i]) continue;
     const SE3 T_c_w = T_w_c[i]->inverse();
@@ -218,9 +210,7 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   auto residual = [&](const Observation& o) {
     const ReprojectionCost cost(o.px);
     double r[2];
-    if (!cost(pose[o.frame].data(), pose[o.frame].data() + 4, points[o.point].data(), proj.data(),
-              dist.data(), r))
-      return 1e9;
+    if (!cost(pose[o.frame].data(), points[o.point].data(), lens.data(), r)) return 1e9;
     return std::hypot(r[0], r[1]);
   };
   auto rms = [&]() {
@@ -236,15 +226,14 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   };
 
   ceres::Solver::Options opts;
-  // A few hundred frames at most: the reduced camera system is small enough to be dense, and the
-  // sparse one is slower here (the lens block couples every frame).
+  // A few hundred frames at most: the reduced camera system is small enough to be dense; the sparse
+  // and the iterative Schur solvers were slower here (the lens block couples every frame).
   opts.linear_solver_type = ceres::DENSE_SCHUR;
   opts.max_num_iterations = cfg.max_iterations;
-  opts.num_threads = 1;  // the lens block touches every residual: two threads mostly wait on its lock
+  opts.num_threads = 2;
   opts.logging_type = ceres::SILENT;
 
-  // lens_cov (if given) receives the covariance of the distortion coefficients (5x5, zero where fixed)
-  // and, when they are refined, of fx fy cx cy; false in *cov_ok if Ceres could not compute it.
+  // The covariance of the lens after the full solve (zero where held); cov_ok false if there is none.
   Eigen::Matrix<double, 9, 9> lens_cov = Eigen::Matrix<double, 9, 9>::Zero();
   bool cov_ok = false;
   // group >= 0: only the tracks of that group (point index modulo cfg.split_groups), no covariance.
@@ -253,43 +242,38 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
     popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(popts);
-    ceres::EigenQuaternionManifold quat;
+    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>> pose_manifold;
     ceres::HuberLoss huber(cfg.huber_px);
     std::vector<int> used(T_w_c.size(), 0);
     for (const Observation& o : obs) {
       if (!o.inlier || (group >= 0 && o.point % cfg.split_groups != group)) continue;
-      auto* cost =
-          new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 4, 3, 3, 4, 5>(new ReprojectionCost(o.px));
-      problem.AddResidualBlock(cost, &huber, pose[o.frame].data(), pose[o.frame].data() + 4,
-                               points[o.point].data(), proj.data(), dist.data());
-      if (!used[o.frame]) problem.SetManifold(pose[o.frame].data(), &quat);
+      auto* cost = new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 7, 3, 9>(new ReprojectionCost(o.px));
+      problem.AddResidualBlock(cost, &huber, pose[o.frame].data(), points[o.point].data(), lens.data());
+      if (!used[o.frame]) problem.SetManifold(pose[o.frame].data(), &pose_manifold);
       used[o.frame] = 1;
     }
-    if (used[first]) {
-      problem.SetParameterBlockConstant(pose[first].data());
-      problem.SetParameterBlockConstant(pose[first].data() + 4);
-    }
+    if (used[first]) problem.SetParameterBlockConstant(pose[first].data());
     if (used[last]) {
       const Vec3 c0 = T_w_c[first]->translation();
       problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<BaselineCost, 1, 4, 3>(new BaselineCost(c0, baseline)), nullptr,
-          pose[last].data(), pose[last].data() + 4);
+          new ceres::AutoDiffCostFunction<BaselineCost, 1, 7>(new BaselineCost(c0, baseline)), nullptr,
+          pose[last].data());
     }
-    std::vector<int> fixed_dist;
-    if (!lens_free || !cfg.refine_radial) fixed_dist.insert(fixed_dist.end(), {0, 1});
-    if (!lens_free || !cfg.refine_tangential) fixed_dist.insert(fixed_dist.end(), {2, 3});
-    if (!lens_free || !cfg.refine_k3) fixed_dist.push_back(4);
+    std::vector<int> held;  // lens parameters kept as they are
+    if (!lens_free || !cfg.refine_radial) held.insert(held.end(), {0, 1});
+    if (!lens_free || !cfg.refine_tangential) held.insert(held.end(), {2, 3});
+    if (!lens_free || !cfg.refine_k3) held.push_back(4);
+    if (!lens_free || !cfg.refine_projection) held.insert(held.end(), {5, 6, 7, 8});
     std::unique_ptr<ceres::SubsetManifold> subset;
-    if (fixed_dist.size() == 5) {
-      problem.SetParameterBlockConstant(dist.data());
-    } else if (!fixed_dist.empty()) {
-      subset = std::make_unique<ceres::SubsetManifold>(5, fixed_dist);
-      problem.SetManifold(dist.data(), subset.get());
+    if (held.size() == lens.size()) {
+      problem.SetParameterBlockConstant(lens.data());
+    } else if (!held.empty()) {
+      subset = std::make_unique<ceres::SubsetManifold>(static_cast<int>(lens.size()), held);
+      problem.SetManifold(lens.data(), subset.get());
     }
-    if (!lens_free || !cfg.refine_projection) problem.SetParameterBlockConstant(proj.data());
     ceres::Solver::Summary summary;
     ceres::Solve(opts, &problem, &summary);
-    if (lens_free && group < 0) cov_ok = lensCovariance(problem, proj.data(), dist.data(), &lens_cov);
+    if (lens_free && group < 0) cov_ok = lensCovariance(problem, lens.data(), &lens_cov);
     return summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
   };
 
@@ -308,10 +292,14 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   for (const Observation& o : obs) res.observations += o.inlier;
   for (int c : count) res.tracks_used += c >= cfg.min_observations;
 
-  res.camera = camera;
-  res.camera.distortion = Distortion::kRadTan;
-  res.camera.k = dist;
-  res.camera.fx = proj[0], res.camera.fy = proj[1], res.camera.cx = proj[2], res.camera.cy = proj[3];
+  auto lensCamera = [&] {
+    CameraModel c = camera;
+    c.distortion = Distortion::kRadTan;
+    std::copy(lens.begin(), lens.begin() + 5, c.k.begin());
+    c.fx = lens[5], c.fy = lens[6], c.cx = lens[7], c.cy = lens[8];
+    return c;
+  };
+  res.camera = lensCamera();
   if (cov_ok) {
     // Scale to the residuals' variance: the covariance above assumes 1 px.
     res.lens_sigma_cov_px = borderSigmaPx(res.camera, lens_cov * res.rms_refined_px * res.rms_refined_px);
@@ -325,17 +313,13 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
     // (independent errors) does not see; whole tracks per group, this spread does.
     const auto pose0 = pose;
     const auto points0 = points;
-    const auto proj0 = proj;
-    const auto dist0 = dist;
+    const auto lens0 = lens;
     double sum2 = 0;
     for (int g = 0; g < cfg.split_groups; ++g) {
       solve(true, g);
-      CameraModel cg = res.camera;
-      cg.k = dist;
-      cg.fx = proj[0], cg.fy = proj[1], cg.cx = proj[2], cg.cy = proj[3];
-      const double d = lensBorderDifferencePx(res.camera, cg);
+      const double d = lensBorderDifferencePx(res.camera, lensCamera());
       sum2 += d * d;
-      pose = pose0, points = points0, proj = proj0, dist = dist0;
+      pose = pose0, points = points0, lens = lens0;
     }
     // Each group holds 1/K of the tracks: the full set's spread is the groups' over sqrt(K).
     const double K = cfg.split_groups;
