@@ -2,8 +2,9 @@
 // Lens self-calibration from feature tracks: a bundle adjustment over all frames (poses, points and
 // the lens) in raw pixels, with Ceres. Direct odometry cannot do this inside its window (7 keyframes
 // over a few centimetres: each point's depth absorbs the lens error), but a track that crosses the image
-// pins the lens down: under motion, its raw pixels must be the projection of one 3D point. On the real
-// ECD slider the given k1 leaves a 4-5 deg yaw drift; see README "Lens self-calibration".
+// pins the lens down: under motion, its raw pixels must be the projection of one 3D point. How well it
+// does is part of the result (lens_sigma_px); see README "Lens self-calibration" for what it finds on
+// the shared sequences.
 #include <array>
 #include <limits>
 #include <optional>
