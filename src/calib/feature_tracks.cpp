@@ -73,10 +73,6 @@ std::vector<FeatureTrack> trackFeatures(const std::vector<cv::Mat>& frames, cons
       }
       live = std::move(kept);
       pts = std::move(kept_pts);
-    } else {
-      for (auto& t : live) retire(std::move(t));
-      live.clear();
-      pts.clear();
     }
     // Top up with new corners away from the live ones.
     const int want = cfg.max_features - static_cast<int>(pts.size());

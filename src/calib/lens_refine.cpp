@@ -6,7 +6,6 @@
 #include <Eigen/Dense>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <stdexcept>
 
@@ -107,6 +106,12 @@ std::array<Vec2, 8> borderPixels(const CameraModel& cam) {
           Vec2(w / 2, 0), Vec2(0, h / 2), Vec2(w, h / 2), Vec2(w / 2, h)};
 }
 
+// Lens parameter i in the LensBlock order: k1 k2 p1 p2 k3 fx fy cx cy.
+double& lensParameter(CameraModel& c, int i) {
+  if (i < 5) return c.k[static_cast<std::size_t>(i)];
+  return i == 5 ? c.fx : i == 6 ? c.fy : i == 7 ? c.cx : c.cy;
+}
+
 // Standard deviation (px, worst direction) of where the lens maps rays through the image border, from the
 // covariance of its parameters: one number for how well the data determine the lens.
 double borderSigmaPx(const CameraModel& cam, const Eigen::Matrix<double, 9, 9>& cov) {
@@ -117,10 +122,9 @@ double borderSigmaPx(const CameraModel& cam, const Eigen::Matrix<double, 9, 9>& 
     for (int i = 0; i < 9; ++i) {
       // Numeric derivative of the projection of a fixed ray with respect to each lens parameter.
       CameraModel a = cam, b = cam;
-      double* pa = i < 5 ? &a.k[i] : (i == 5 ? &a.fx : i == 6 ? &a.fy : i == 7 ? &a.cx : &a.cy);
-      double* pb = i < 5 ? &b.k[i] : (i == 5 ? &b.fx : i == 6 ? &b.fy : i == 7 ? &b.cx : &b.cy);
       const double step = i < 5 ? 1e-6 : 1e-4;
-      *pa += step, *pb -= step;
+      lensParameter(a, i) += step;
+      lensParameter(b, i) -= step;
       J.col(i) = (a.project(ray) - b.project(ray)) / (2 * step);
     }
     const Eigen::Matrix2d S = J * cov * J.transpose();
@@ -159,8 +163,10 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   if (!(baseline > 0)) throw std::invalid_argument("lens refinement: the first and last poses coincide");
 
   // Parameters, stored where Ceres can point at them for the whole solve.
-  LensBlock lens{0, 0, 0, 0, 0, camera.fx, camera.fy, camera.cx, camera.cy};
-  if (camera.distortion == Distortion::kRadTan) std::copy(camera.k.begin(), camera.k.end(), lens.begin());
+  CameraModel start = camera;
+  if (camera.distortion != Distortion::kRadTan) start.k = {};  // undistorted: radtan with zeros
+  LensBlock lens;
+  for (int i = 0; i < 9; ++i) lens[static_cast<std::size_t>(i)] = lensParameter(start, i);
   std::vector<PoseBlock> pose(T_w_c.size());
   for (std::size_t i = 0; i < T_w_c.size(); ++i) {
     if (!T_w_c[i]) continue;
@@ -259,11 +265,13 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
           new ceres::AutoDiffCostFunction<BaselineCost, 1, 7>(new BaselineCost(c0, baseline)), nullptr,
           pose[last].data());
     }
-    std::vector<int> held;  // lens parameters kept as they are
-    if (!lens_free || !cfg.refine_radial) held.insert(held.end(), {0, 1});
-    if (!lens_free || !cfg.refine_tangential) held.insert(held.end(), {2, 3});
-    if (!lens_free || !cfg.refine_k3) held.push_back(4);
-    if (!lens_free || !cfg.refine_projection) held.insert(held.end(), {5, 6, 7, 8});
+    // Which lens parameters (LensBlock order) move; the others are held as they are.
+    const std::array<bool, 9> moves{cfg.refine_radial,     cfg.refine_radial,     cfg.refine_tangential,
+                                    cfg.refine_tangential, cfg.refine_k3,         cfg.refine_projection,
+                                    cfg.refine_projection, cfg.refine_projection, cfg.refine_projection};
+    std::vector<int> held;
+    for (int i = 0; i < 9; ++i)
+      if (!lens_free || !moves[static_cast<std::size_t>(i)]) held.push_back(i);
     std::unique_ptr<ceres::SubsetManifold> subset;
     if (held.size() == lens.size()) {
       problem.SetParameterBlockConstant(lens.data());
@@ -295,8 +303,7 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   auto lensCamera = [&] {
     CameraModel c = camera;
     c.distortion = Distortion::kRadTan;
-    std::copy(lens.begin(), lens.begin() + 5, c.k.begin());
-    c.fx = lens[5], c.fy = lens[6], c.cx = lens[7], c.cy = lens[8];
+    for (int i = 0; i < 9; ++i) lensParameter(c, i) = lens[static_cast<std::size_t>(i)];
     return c;
   };
   res.camera = lensCamera();

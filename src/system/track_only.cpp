@@ -156,7 +156,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   SE3 T_prev;
   TimeNs t_prev = -1, t_last = -1;
   bool need_keyframe = false, lost = false;
-  // Correlations of the event frames tracked on this keyframe (the lost-track check's reference).
+  // Correlations and costs of the event frames tracked on this keyframe (the lost-track check's reference).
   std::vector<double> recent_corr, recent_cost;
   TimeNs first_ef_t = -1, last_ef_t = -1;
 
