@@ -100,6 +100,9 @@ void addRunCommand(CLI::App& app) {
   param("--window", c.backend.window, "backend.window", "Keyframes in the back-end window");
   param("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
         "Points each keyframe hosts in the back-end");
+  param("--window-removal", c.backend.removal, "backend.removal",
+        "Keyframe that leaves a full window: 1 DSO's rule (keeps a long baseline), 0 the oldest, -1 auto "
+        "(DSO's rule on frames alone, the oldest with events)");
   param("--ba-iterations", c.backend.ba.iterations, "backend.ba.iterations",
         "Back-end iterations per keyframe");
   param("--init-parallax", c.bootstrap.min_parallax_px, "bootstrap.min_parallax_px",

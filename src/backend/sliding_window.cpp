@@ -1,6 +1,7 @@
 #include "backend/sliding_window.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "frontend/frame_tracker.hpp"  // sampleBilinear
@@ -10,6 +11,10 @@ namespace eds {
 void BackendConfig::validate() const {
   if (window < 2) throw std::invalid_argument("backend: window must hold at least 2 keyframes");
   if (points_per_keyframe < 1) throw std::invalid_argument("backend: points_per_keyframe must be >= 1");
+  if (removal < -1 || removal > 1)
+    throw std::invalid_argument("backend: removal must be -1 (auto), 0 (oldest) or 1 (DSO's rule)");
+  if (!(min_visible >= 0 && min_visible <= 1))
+    throw std::invalid_argument("backend: min_visible must lie in [0, 1]");
 }
 
 SlidingWindow::SlidingWindow(const CameraModel& pinhole, BackendConfig cfg)
@@ -49,12 +54,41 @@ BaStats SlidingWindow::optimize() {
   if (frames_.size() < 2) return {};
   const BaStats st = ba_.optimize(frames_, points_, cfg_.marginalize ? &prior_ : nullptr);
   // Points that lost every observation go to the map (they still carry a depth).
-  while (static_cast<int>(frames_.size()) > cfg_.window) marginalizeOldest();
+  while (static_cast<int>(frames_.size()) > cfg_.window) removeKeyframe(keyframeToRemove());
   return st;
 }
 
-void SlidingWindow::marginalizeOldest() {
-  constexpr int m = 0;
+int SlidingWindow::keyframeToRemove() const {
+  const int F = static_cast<int>(frames_.size());
+  if (cfg_.removal == 0 || F < 3) return 0;
+  // Points of each keyframe that the newest still sees: inside it, with a photometric error of an
+  // inlier there (as DSO counts them: occluded or far-off views do not count).
+  std::vector<int> hosted(F, 0), visible(F, 0);
+  Eigen::Matrix<double, 8, 1> r;
+  for (const BaPoint& p : points_) {
+    if (p.outlier || !(p.inv_depth > 0) || p.host >= F - 2) continue;
+    ++hosted[p.host];
+    visible[p.host] += ba_.evaluate(frames_, p, F - 1, r, nullptr) &&
+                       std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy;
+  }
+  for (int i = 0; i + 2 < F; ++i)
+    if (visible[i] < cfg_.min_visible * hosted[i]) return i;
+  const auto dist = [&](int i, int j) {
+    return (frames_[i].T_w_c.translation() - frames_[j].T_w_c.translation()).norm();
+  };
+  int best = 0;
+  double best_score = -1;
+  for (int i = 0; i + 2 < F; ++i) {
+    double sum = 0;
+    for (int j = 0; j + 1 < F; ++j)  // the newest enters only through the first factor
+      if (j != i) sum += 1.0 / (1e-5 + dist(i, j));
+    const double score = std::sqrt(dist(i, F - 1)) * sum;
+    if (score > best_score) best_score = score, best = i;
+  }
+  return best;
+}
+
+void SlidingWindow::removeKeyframe(int m) {
   if (cfg_.marginalize) prior_ = ba_.marginalize(frames_, points_, &prior_, m);
   retired_kf_.push_back({ids_[m], times_[m], frames_[m].T_w_c});
   retirePointsOf(m);

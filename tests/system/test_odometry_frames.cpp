@@ -123,13 +123,15 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   EXPECT_LE(a.trans.rmse, 0.003);
   EXPECT_GE(a.coverage, 0.9);
   // The refined trajectory (each pose through its keyframe's final pose): the back-end's later
-  // refinement of the keyframes shows mostly in the rotation (here 0.125 -> 0.069 deg).
+  // refinement of the keyframes shows mostly in the rotation (here 0.089 -> 0.075 deg; with the window
+  // dropping its oldest keyframe instead of by DSO's rule, 0.125 -> 0.069).
   ASSERT_EQ(r.frames_refined.size(), r.frames.size());
   const eval::AteResult ar = evaluateTrajectory(r.frames_refined, gt);
   std::printf("[ frames-only room 8 s ] refined: ATE %.3f cm, rot %.3f deg (as tracked: %.3f deg)\n",
               ar.trans.rmse * 100, ar.rot.rmse, a.rot.rmse);
   EXPECT_LE(ar.trans.rmse, 0.003);
-  EXPECT_LT(ar.rot.rmse, 0.75 * a.rot.rmse);
+  EXPECT_LT(ar.rot.rmse, 0.9 * a.rot.rmse);
+  EXPECT_LE(ar.rot.rmse, 0.1);
   // What eds run writes: the map as PLY, read back; the refined trajectory as the main file.
   writeOdometryOutputs(dir / "out", r, cfg);
   EXPECT_EQ(readPly(dir / "out" / "map.ply").xyz.size(), r.map.size());
