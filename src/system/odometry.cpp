@@ -317,6 +317,9 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
   FrameFrontend& odo = run.frontend();
   odo.worker().waitIdle();
   SlidingWindow& window = odo.worker().window();
+  // The last keyframes had fewer solves than the ones before them: converge the window once more before
+  // writing it (ECD slider rotation drift, median over 5 start times: 2.05 -> 1.64 deg).
+  window.optimize();
   window.flush();
   const BackendTimings& bt = odo.worker().timings();
   res.mapping_ms = bt.mapping_ms;

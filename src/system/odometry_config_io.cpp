@@ -69,6 +69,7 @@ std::map<std::string, Field> fields(OdometryConfig& c) {
   f["backend.window"] = &be.window, f["backend.points_per_keyframe"] = &be.points_per_keyframe;
   f["backend.marginalize"] = &be.marginalize, f["backend.ba.iterations"] = &be.ba.iterations;
   f["backend.removal"] = &be.removal, f["backend.min_visible"] = &be.min_visible;
+  f["backend.reference_inliers_only"] = &be.reference_inliers_only;
   f["backend.ba.huber"] = &be.ba.huber, f["backend.ba.grad_weight_c"] = &be.ba.grad_weight_c;
   f["backend.ba.outlier_energy"] = &be.ba.outlier_energy,
   f["backend.ba.lambda_initial"] = &be.ba.lambda_initial;
