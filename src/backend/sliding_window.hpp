@@ -22,7 +22,10 @@ struct BackendConfig {
   //   frames only: slider 0.53 -> 0.46 cm, rotation drift 4.4 -> 3.8 deg; ESIM 0.109 cm / 0.191 deg
   //   -> 0.108 cm / 0.213 deg; room 0.076 -> 0.083 cm;
   //   events: ESIM 0.133 cm / 0.180 deg -> 0.132 cm / 0.214 deg, room and desk within 0.01 cm.
-  // (Without first estimates it had pulled the scale: ESIM 0.76 cm, slider 2.4 cm.)
+  // (Without first estimates it had pulled the scale: ESIM 0.76 cm, slider 2.4 cm.) Those with the
+  // oldest-leaves rule; with DSO's (below), threaded: slider drift over the slide, median of 5 start
+  // times, 1.42 -> 2.18 deg; ESIM frames 0.086 cm / 0.100 deg -> 0.083 / 0.094, events 0.113 / 0.124
+  // -> 0.109 / 0.097; room frames and desk events at 5 Hz within 0.01 cm.
   bool marginalize = false;
   // Which keyframe leaves a full window. 1, DSO's rule: the oldest one whose points have left the
   // newest keyframe's view (fewer than min_visible of them inside its image), else the one maximizing
