@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include "backend/sliding_window.hpp"
 #include "sim_frames.hpp"
 
@@ -53,6 +55,60 @@ TEST(SlidingWindow, DsoRuleDropsAKeyframeOutOfViewFirst) {
   EXPECT_EQ(windowAlong(xs, cfg, depth).keyframeToRemove(), 2);
   // The newest two never leave, however crowded.
   EXPECT_LT(windowAlong({0.0, 0.3, 0.6, 0.9, 1.2, 1.21}, cfg, depth).keyframeToRemove(), 4);
+}
+
+// Two keyframes at one pose; in the newest a square of the image shows another surface (an occluder
+// that came between). The tracking reference keeps the older keyframe's points outside the square and
+// drops those behind it, whose photometric error there is an outlier's.
+TEST(SlidingWindow, TrackingReferenceDropsPointsHiddenInTheNewestKeyframe) {
+  const CameraModel cam = test::simCamera();
+  cv::Mat older(cam.height, cam.width, CV_32F), newest;
+  cv::RNG rng(7);
+  rng.fill(older, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::GaussianBlur(older, older, cv::Size(0, 0), 0.7);
+  newest = older.clone();
+  const cv::Rect occluder(100, 60, 60, 60);
+  cv::Mat patch = newest(occluder);
+  rng.fill(patch, cv::RNG::UNIFORM, 0.0, 1.0);
+  cv::GaussianBlur(patch, patch, cv::Size(0, 0), 0.7);
+  // Whole pattern (2 px around the point) on the occluder: hidden; pattern off it entirely: in sight.
+  const auto hiddenAt = [&](float u, float v) {
+    return u >= occluder.x + 2 && u < occluder.x + occluder.width - 2 && v >= occluder.y + 2 &&
+           v < occluder.y + occluder.height - 2;
+  };
+  const auto inSightAt = [&](float u, float v) {
+    return u < occluder.x - 2 || u >= occluder.x + occluder.width + 2 || v < occluder.y - 2 ||
+           v >= occluder.y + occluder.height + 2;
+  };
+  std::vector<KeyframePoint> pts;
+  int hidden = 0, in_sight = 0;
+  for (int v = 10; v < cam.height - 10; v += 10)
+    for (int u = 10; u < cam.width - 10; u += 10) {
+      KeyframePoint p;
+      p.u = static_cast<float>(u), p.v = static_cast<float>(v), p.inv_depth = 0.5;
+      pts.push_back(p);
+      hidden += hiddenAt(p.u, p.v);
+      in_sight += inSightAt(p.u, p.v);
+    }
+  ASSERT_GE(hidden, 25);
+  for (const bool inliers_only : {true, false}) {
+    BackendConfig cfg;
+    cfg.points_per_keyframe = static_cast<int>(pts.size());
+    cfg.reference_inliers_only = inliers_only;
+    SlidingWindow w(cam, cfg);
+    w.addKeyframe(0, 0, SE3(), 0, 0, older, pts);
+    w.addKeyframe(1, 1, SE3(), 0, 0, newest, {});
+    int ref_hidden = 0, ref_in_sight = 0;
+    for (const KeyframePoint& p : w.pointsInNewest()) {
+      ref_hidden += hiddenAt(p.u, p.v);
+      ref_in_sight += inSightAt(p.u, p.v);
+    }
+    EXPECT_EQ(ref_in_sight, in_sight);
+    if (inliers_only)
+      EXPECT_LE(ref_hidden, hidden / 10);  // a chance match of 8 pixels at most now and then
+    else
+      EXPECT_EQ(ref_hidden, hidden);
+  }
 }
 
 TEST(SlidingWindow, RejectsBadRemovalSettings) {
