@@ -4,7 +4,8 @@
 # and room presets seen through the slider's own calibration, through the same focal length without
 # distortion, and through a wider lens (fx 200). Drift: the rotation between the first and the last
 # pose (the slider does not rotate), as a rotation vector in the first camera's frame (y = yaw).
-# Extra arguments go to every `eds run` (e.g. --window 10, --config FILE).
+# Extra arguments go to every `eds run` (e.g. --window 10, --window-removal 0, --config FILE). Then the
+# real slider from five start times, and their median.
 # Usage: bench/slider_drift.sh [OUT_DIR] [eds run options]   (needs build/release and ../shared/data)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -54,3 +55,18 @@ for preset in desk room; do
 done
 "$EDS" run "$SLIDER" --frames-only --sync-backend --out "$OUT/run_real" "$@" > /dev/null 2>&1 || true
 echo "| real slider_depth | slider | $(drift "$OUT/run_real/trajectory_frames.txt") |"
+
+# The drift moves by a few tenths of a degree with small changes of the input: the same run from later
+# start times (skipping 1, 2, 4 and 7 frames) shows the spread.
+echo
+echo "| real slider_depth, start (s) | drift x y z (deg) | drift (deg) |"
+echo "|---|---|---|"
+angles=()
+for start in 0 0.04 0.08 0.16 0.3; do
+  "$EDS" run "$SLIDER" --frames-only --sync-backend --start "$start" --out "$OUT/run_real_$start" "$@" \
+    > /dev/null 2>&1 || true
+  d=$(drift "$OUT/run_real_$start/trajectory_frames.txt")
+  angles+=("${d##*| }")
+  echo "| $start | $d |"
+done
+echo "median over the start times: $(printf '%s\n' "${angles[@]}" | sort -g | awk '{a[NR]=$1} END{print a[int((NR+1)/2)]}') deg"
