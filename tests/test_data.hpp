@@ -1,6 +1,6 @@
 #pragma once
-// Locating ../shared/data for tests. Tests that need it skip when it is absent (a user's clone),
-// but fail in CI (env CI set), where it must be present.
+// Locating ../shared/data for tests. Tests that need it skip when it is absent (a user's clone), but
+// fail when EDS_REQUIRE_DATA is set (CI exports it), so that a missing input cannot pass as a skip.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,6 +11,12 @@
 #include <vector>
 
 namespace eds::test {
+
+// True when every input a test needs must be present: EDS_REQUIRE_DATA set to anything but "0".
+inline bool dataRequired() {
+  const char* env = std::getenv("EDS_REQUIRE_DATA");
+  return env != nullptr && std::string(env) != "0" && std::string(env) != "";
+}
 
 inline std::filesystem::path sharedDataDir() {
   if (const char* env = std::getenv("EDS_SHARED_DATA")) return env;
@@ -39,10 +45,15 @@ inline std::filesystem::path tempDir(const std::string& name) {
 
 }  // namespace eds::test
 
-// Skips (or fails under CI) when the shared data item `rel` is absent; else sets `var` to its path.
-#define EDS_REQUIRE_SHARED(var, rel)                                              \
-  const std::filesystem::path var = eds::test::sharedDataDir() / (rel);           \
-  if (!std::filesystem::exists(var)) {                                            \
-    if (std::getenv("CI")) FAIL() << "shared data missing in CI: " << var;        \
-    GTEST_SKIP() << "shared data not found: " << var << " (set EDS_SHARED_DATA)"; \
+// Skips (or fails under EDS_REQUIRE_DATA) the current test when `what` is unavailable: the one place
+// where a test may give up for want of an input (shared data, a built program, an HDF5 plugin).
+#define EDS_REQUIRE_AVAILABLE(available, what)                                               \
+  if (!(available)) {                                                                        \
+    if (eds::test::dataRequired()) FAIL() << "required input missing: " << (what);           \
+    GTEST_SKIP() << "input not found: " << (what) << " (set EDS_SHARED_DATA for ../shared)"; \
   }
+
+// Sets `var` to the path of the shared data item `rel`, or skips / fails as EDS_REQUIRE_AVAILABLE.
+#define EDS_REQUIRE_SHARED(var, rel)                                    \
+  const std::filesystem::path var = eds::test::sharedDataDir() / (rel); \
+  EDS_REQUIRE_AVAILABLE(std::filesystem::exists(var), var)

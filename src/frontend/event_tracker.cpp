@@ -142,6 +142,16 @@ double priorCost(const PosePrior* prior, double scale, const SE3& T, Vec6* e_out
 }
 }  // namespace
 
+double accumulatePosePrior(const PosePrior& prior, double scale, const SE3& T_ef_kf,
+                           Eigen::Matrix<double, 12, 12>& H, Eigen::Matrix<double, 12, 1>& g) {
+  Vec6 e;
+  const double cost = priorCost(&prior, scale, T_ef_kf, &e);
+  const Vec6 info = scale * prior.sigma.cwiseProduct(prior.sigma).cwiseInverse();
+  H.topLeftCorner<6, 6>().diagonal() += info;
+  g.head<6>() += info.cwiseProduct(e);
+  return cost;
+}
+
 int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior,
                              Eigen::VectorXd& r, Eigen::MatrixXd& J, double& cost_out,
                              int& iterations) const {
@@ -187,14 +197,7 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
     const Eigen::MatrixXd JtW = (J.array().colwise() * w.array()).matrix().transpose();
     Eigen::Matrix<double, 12, 12> H = JtW * J;
     Eigen::Matrix<double, 12, 1> g = JtW * r;
-    if (prior) {
-      // e(exp(ξ) T) ≈ e(T) + ξ for the small errors a prior is meant for.
-      Vec6 e;
-      priorCost(prior, data_var_, T_ef_kf, &e);
-      const Vec6 info = data_var_ * prior->sigma.cwiseProduct(prior->sigma).cwiseInverse();
-      H.topLeftCorner<6, 6>().diagonal() += info;
-      g.head<6>() += info.cwiseProduct(e);
-    }
+    if (prior) accumulatePosePrior(*prior, data_var_, T_ef_kf, H, g);
     bool improved = false;
     for (int tries = 0; tries < 6 && !improved; ++tries) {
       Eigen::Matrix<double, 12, 12> Hd = H;

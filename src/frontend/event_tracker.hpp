@@ -47,6 +47,13 @@ struct PosePrior {
   Vec6 sigma = Vec6::Constant(1.0);
 };
 
+// The prior's share of the tracker's 12-parameter normal equations (ξ, ν) at T_ef_kf: with
+// info = scale / σ², H += diag(info) and g += info ∘ e on the pose block, taking e(exp(ξ) T) ≈ e(T) + ξ
+// as the small errors a prior is meant for allow. `scale` is the data term's residual variance.
+// Returns the prior's cost ½ scale eᵀ Σ⁻¹ e.
+double accumulatePosePrior(const PosePrior& prior, double scale, const SE3& T_ef_kf,
+                           Eigen::Matrix<double, 12, 12>& H, Eigen::Matrix<double, 12, 1>& g);
+
 struct TrackResult {
   bool ok = false;
   int iterations = 0;

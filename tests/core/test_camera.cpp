@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <random>
 
@@ -44,12 +45,17 @@ void expectMatchesOpenCv(const CameraModel& cam) {
     const cv::Matx<double, 1, 5> D(cam.k[0], cam.k[1], cam.k[2], cam.k[3], cam.k[4]);
     cv::undistortPoints(raw, ref, K, D, cv::noArray(), K, crit);
   }
-  double worst = 0;
+  // The camera model, and the event look-up table every event goes through (float, one per raw pixel).
+  const Undistorter und(cam);
+  double worst = 0, worst_lut = 0;
   for (std::size_t i = 0; i < raw.size(); ++i) {
     const Vec2 u = cam.undistortPixel(Vec2(raw[i].x, raw[i].y));
     worst = std::max(worst, (u - Vec2(ref[i].x, ref[i].y)).norm());
+    const cv::Point2f l = und.eventLut(static_cast<int>(raw[i].x), static_cast<int>(raw[i].y));
+    worst_lut = std::max(worst_lut, std::hypot(l.x - ref[i].x, l.y - ref[i].y));
   }
   EXPECT_LT(worst, 1e-3) << "largest difference from OpenCV over the sensor, px";
+  EXPECT_LT(worst_lut, 1e-3) << "event look-up table: largest difference from OpenCV, px";
 }
 
 TEST(Camera, RadTanUndistortionMatchesOpenCvOverWholeSensor) { expectMatchesOpenCv(sliderLikeCamera()); }

@@ -14,6 +14,7 @@
 
 #include "eval/rpe.hpp"
 #include "eval/rpg_folder.hpp"
+#include "test_data.hpp"
 
 namespace fs = std::filesystem;
 
@@ -22,19 +23,9 @@ namespace {
 constexpr int kExpectedCases = 7;
 constexpr double kRelTol = 1e-6;
 
-fs::path sharedData() {
-  if (const char* env = std::getenv("EDS_SHARED_DATA")) return env;
-  return fs::path(EDS_SOURCE_DIR) / ".." / "shared" / "data";
-}
+fs::path sharedData() { return eds::test::sharedDataDir(); }
 
-// Skips when the shared data is absent (a user's clone), but fails in CI where it must be present.
-#define EDS_REQUIRE_REFERENCE_DATA(dir)                                           \
-  do {                                                                            \
-    if (!fs::is_directory(dir)) {                                                 \
-      if (std::getenv("CI")) FAIL() << "reference data missing in CI: " << (dir); \
-      GTEST_SKIP() << "no reference data at " << (dir);                           \
-    }                                                                             \
-  } while (false)
+#define EDS_REQUIRE_REFERENCE_DATA(dir) EDS_REQUIRE_AVAILABLE(fs::is_directory(dir), dir)
 
 struct Case {
   fs::path dir;
@@ -145,10 +136,7 @@ TEST(EvalReference, ProgramWritesJson) {
   const fs::path dir = sharedData() / "eval_reference" / "mvsec" / "flying1";
   EDS_REQUIRE_REFERENCE_DATA(dir);
   const fs::path program = fs::path(EDS_BINARY_DIR) / "eds";
-  if (!fs::exists(program)) {
-    if (std::getenv("CI")) FAIL() << "program not built: " << program;
-    GTEST_SKIP() << "program not built: " << program;
-  }
+  EDS_REQUIRE_AVAILABLE(fs::exists(program), program);
   const fs::path out = fs::path(testing::TempDir()) / "eds_eval_flying1.json";
   fs::remove(out);
   const std::string cmd = "\"" + program.string() + "\" eval --dir \"" + dir.string() + "\" --json \"" +

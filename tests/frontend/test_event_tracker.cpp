@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -75,6 +76,43 @@ TEST(EventFrame, GaussianWeightsBilinearVotesMedianTimeUnitNorm) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
   bad.compensation_lookahead = std::nan("");
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// A distorted lens puts events between pixel centres: each event's vote goes to the four pixels around
+// its undistorted position with the bilinear weights (1-ax)(1-ay), ax(1-ay), (1-ax)ay, ax ay.
+TEST(EventFrame, BilinearVoteOfADistortedEventSplitsOverFourPixels) {
+  CameraModel cam = pinhole240();
+  cam.distortion = Distortion::kRadTan;  // the ECD DAVIS240C lens
+  cam.k = {-0.138592767408, 0.0933736664192, -0.000335586987532, 0.000173720158228, 0.0};
+  const Undistorter und(cam);
+  EventFrameConfig cfg;
+  cfg.num_events = 1;
+  cfg.blur = false;
+  cfg.reversal_compensation = false;
+  EventFrameBuilder builder(und, cfg);
+  int checked = 0;
+  for (int y = 10; y < cam.height - 10; y += 13) {
+    for (int x = 10; x < cam.width - 10; x += 17) {
+      const cv::Point2f u = und.eventLut(x, y);
+      const float ax = u.x - std::floor(u.x), ay = u.y - std::floor(u.y);
+      // Fractions that tell every weight apart (and ax from ay).
+      if (ax < 0.1f || ax > 0.9f || ay < 0.1f || ay > 0.9f || std::abs(ax - ay) < 0.1f) continue;
+      EventArray ev;
+      ev.push_back(1000, static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), -1);
+      EventFrame ef;
+      builder.build(ev, 0, ef);
+      const int x0 = static_cast<int>(std::floor(u.x)), y0 = static_cast<int>(std::floor(u.y));
+      const std::array<double, 4> w = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay};
+      const double norm = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3]);
+      EXPECT_NEAR(ef.delta.at<float>(y0, x0), -w[0] / norm, 1e-5) << x << "," << y;
+      EXPECT_NEAR(ef.delta.at<float>(y0, x0 + 1), -w[1] / norm, 1e-5) << x << "," << y;
+      EXPECT_NEAR(ef.delta.at<float>(y0 + 1, x0), -w[2] / norm, 1e-5) << x << "," << y;
+      EXPECT_NEAR(ef.delta.at<float>(y0 + 1, x0 + 1), -w[3] / norm, 1e-5) << x << "," << y;
+      EXPECT_NEAR(cv::norm(ef.delta), 1.0, 1e-5);  // nothing voted anywhere else
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10);
 }
 
 TEST(EventFrame, ReversalCompensationAddsTheEventTheHysteresisHeldBack) {
@@ -224,6 +262,41 @@ TEST(EventTracker, JacobianMatchesNumericDifferences) {
     const double rel = (J.col(k) - Jn.col(k)).norm() / Jn.col(k).norm();
     EXPECT_LT(rel, 1e-4) << "parameter " << k;
   }
+}
+
+// The motion prior's gradient and Gauss-Newton Hessian in the solve against numeric derivatives of its
+// cost, a little off the prior (where e(exp(ξ) T) ≈ e(T) + ξ holds to O(|e|)) with unequal sigmas.
+TEST(EventTracker, PosePriorGradientAndHessianMatchNumericDifferences) {
+  PosePrior prior;
+  prior.T_ef_kf = SE3(SO3::exp(Vec3(0.02, -0.01, 0.03)), Vec3(0.1, -0.05, 0.02));
+  prior.sigma << 0.01, 0.02, 0.005, 0.004, 0.008, 0.002;
+  const double scale = 0.3;
+  Vec6 off;
+  off << 2e-4, -1e-4, 3e-4, -2e-4, 1e-4, 2e-4;
+  const SE3 T = SE3::exp(off) * prior.T_ef_kf;
+  Eigen::Matrix<double, 12, 12> H = Eigen::Matrix<double, 12, 12>::Zero();
+  Eigen::Matrix<double, 12, 1> g = Eigen::Matrix<double, 12, 1>::Zero();
+  const double cost = accumulatePosePrior(prior, scale, T, H, g);
+  const auto costAt = [&](const Vec6& xi) {
+    Eigen::Matrix<double, 12, 12> h = Eigen::Matrix<double, 12, 12>::Zero();
+    Eigen::Matrix<double, 12, 1> q = Eigen::Matrix<double, 12, 1>::Zero();
+    return accumulatePosePrior(prior, scale, SE3::exp(xi) * T, h, q);
+  };
+  EXPECT_NEAR(cost, costAt(Vec6::Zero()), 1e-15);
+  const Vec6 info = scale * prior.sigma.cwiseProduct(prior.sigma).cwiseInverse();
+  EXPECT_NEAR(cost, 0.5 * off.dot(info.cwiseProduct(off)), 1e-3 * cost);
+  const double h = 1e-7;
+  Vec6 num;
+  for (int k = 0; k < 6; ++k) num[k] = (costAt(Vec6::Unit(k) * h) - costAt(-Vec6::Unit(k) * h)) / (2 * h);
+  EXPECT_LT((g.head<6>() - num).norm(), 1e-2 * num.norm())
+      << g.head<6>().transpose() << " vs " << num.transpose();
+  const double hh = 1e-4;  // second differences: the Hessian of the cost at T
+  for (int k = 0; k < 6; ++k) {
+    const double d2 = (costAt(Vec6::Unit(k) * hh) - 2 * cost + costAt(-Vec6::Unit(k) * hh)) / (hh * hh);
+    EXPECT_NEAR(H(k, k), d2, 1e-2 * d2) << "pose parameter " << k;
+  }
+  EXPECT_TRUE((H.bottomRows<6>().isZero() && H.topRightCorner<6, 6>().isZero() && g.tail<6>().isZero()));
+  EXPECT_TRUE((H.topLeftCorner<6, 6>() - Mat6(info.asDiagonal())).isZero(1e-12));
 }
 
 TEST(EventTracker, EgmRowIsTheGradientDottedWithThePixelFlow) {

@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "io/hdf5_events.hpp"
+#include "test_data.hpp"
 
 namespace eds {
 namespace {
@@ -309,9 +310,8 @@ TEST(Hdf5Events, GzipRoundTrip) {
 }
 
 TEST(Hdf5Events, BloscRoundTripThroughDebianPlugin) {
-  if (!hdf5BloscAvailable()) {
-    GTEST_SKIP() << "HDF5 cannot load the blosc filter (install hdf5-filter-plugin-blosc-serial)";
-  }
+  EDS_REQUIRE_AVAILABLE(hdf5BloscAvailable(),
+                        "HDF5's blosc filter (install hdf5-filter-plugin-blosc-serial)");
   TempDir dir;
   const std::string path = dir.file("blosc.h5");
   const EventArray ev = makeEvents(300'000, 9);

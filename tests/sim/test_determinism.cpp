@@ -94,7 +94,7 @@ TEST(SimulatorArguments, BadValuesGiveClearErrors) {
 
 TEST(SimulatorArguments, CommandLineReportsErrorsWithoutCrashing) {
   const fs::path eds = fs::path(EDS_BINARY_DIR) / "eds";
-  if (!fs::exists(eds)) GTEST_SKIP() << "eds program not built";
+  EDS_REQUIRE_AVAILABLE(fs::exists(eds), eds);
   const auto dir = test::tempDir("sim_cli");
   const auto run = [&](const std::string& args) {
     const std::string cmd = eds.string() + " simulate " + args + " --out " + (dir / "o").string() + " > " +
