@@ -68,7 +68,8 @@ std::vector<EpipolarMatch> epipolarSearch(const SearchFrame& host, const SearchF
     if (best_j < 0 || !std::isfinite(best)) continue;
     for (int j = 0; j < n; ++j)
       if (std::abs(j - best_j) > 2) second = std::min(second, E[j]);
-    if (second < cfg.uniqueness * best) continue;
+    // Not unique: "<=" so that two exact matches (zero energy both) are refused as well.
+    if (second <= cfg.uniqueness * best) continue;
     // Gauss-Newton on ρ from the best sample (numeric derivative of the residuals along the line).
     double rho = rho_lo + (rho_hi - rho_lo) * best_j / (n - 1);
     const double h = (rho_hi - rho_lo) / (n - 1) * 0.05;

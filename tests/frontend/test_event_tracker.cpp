@@ -311,6 +311,26 @@ TEST(EventTracker, EgmRowIsTheGradientDottedWithThePixelFlow) {
   EXPECT_NEAR(a.dot(nu), -0.7 * (-cam.fx), 1e-9);
 }
 
+// Every column of the EGM row against the numeric image velocity of the point, on a lens with fx != fy,
+// off the principal point and with both gradient components non-zero: a centred point or a gradient
+// along x alone would hide a wrong sign or focal length in the y row.
+TEST(EventTracker, EgmRowMatchesTheNumericPixelFlowInEveryColumn) {
+  CameraModel cam = pinhole240();
+  cam.fx = 210.0, cam.fy = 180.0, cam.cx = 121.0, cam.cy = 87.0;
+  const double u = 40.0, v = 150.0, Z = 1.7, gx = 0.4, gy = -0.9;
+  const Vec3 p_c((u - cam.cx) / cam.fx * Z, (v - cam.cy) / cam.fy * Z, Z);
+  const Row6 a = egmRow(cam, u, v, gx, gy, 1.0 / Z);
+  const double h = 1e-6;
+  for (int k = 0; k < 6; ++k) {
+    // The camera moves with twist ν = e_k: a static point moves by -(v + ω × p) in the camera frame.
+    const Vec6 nu = Vec6::Unit(k);
+    const Vec3 dp = -(nu.head<3>() + nu.tail<3>().cross(p_c));
+    const Vec2 flow = (cam.project(p_c + h * dp) - cam.project(p_c - h * dp)) / (2 * h);
+    const double expected = -(gx * flow.x() + gy * flow.y());
+    EXPECT_NEAR(a[k], expected, 1e-6 * (1 + std::abs(expected))) << "column " << k;
+  }
+}
+
 TEST(EventTracker, KeyframeWithoutDepthIsAClearError) {
   const CameraModel cam = pinhole240();
   EventTracker tracker(cam, {});

@@ -3,7 +3,9 @@
 // must recover the true relative pose.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <stdexcept>
+#include <vector>
 
 #include "frontend/event_tracker.hpp"
 #include "system/sim_event_frame_case.hpp"
@@ -29,13 +31,32 @@ TEST(EventTrackerOnSim, RecoversThePoseFromOneDegreeAndOneCentimetreOff) {
               o.T_ef_kf_true.so3().angle() * 180 / M_PI, o.T_ef_kf_true.translation().norm() * 1000);
   EXPECT_TRUE(res.ok) << res.failure;
   EXPECT_LT(rot_deg, 0.1);
-  // Issue #4, acceptance 2: < 1 mm; we measure 0.82 mm here. Without the event frame's reversal
-  // compensation it is 2.7 mm: a DVS pixel loses one event at each turn of its brightness
-  // (event_frame.hpp). One frame's error varies with the instant: bench_tracker_sim_study repeats
-  // this case at 11 instants, median 1.23 mm (5 of 11 under 1 mm; 1.07 mm from an idealized sensor
-  // without hysteresis), so at C = 0.15 this instant is not the rule; at C = 0.05 every instant
-  // passes (next test).
+  // Measured 0.82 mm / 0.036 deg at this instant; without the event frame's reversal compensation
+  // 2.7 mm (a DVS pixel loses one event at each turn of its brightness, event_frame.hpp). The error
+  // varies with the instant: the next test holds the median over 11 instants.
   EXPECT_LT(trans_mm, 1.0);
+}
+
+// One event frame's pose at C = 0.15 at 11 instants 50 ms apart (bench_tracker_sim_study's table):
+// measured median 1.234 mm / 0.0618 deg (1.07 mm from an idealized sensor without hysteresis).
+TEST(EventTrackerOnSim, MedianErrorOverElevenInstantsAtCoarseThresholds) {
+  const SE3 offset(SO3::exp(Vec3(0.6, -0.8, 0.0).normalized() * (M_PI / 180.0)), Vec3(0.006, -0.008, 0.0));
+  std::vector<double> trans_mm, rot_deg;
+  for (int k = 0; k <= 10; ++k) {
+    SimEventFrameCaseConfig cfg;
+    cfg.keyframe_time_s = 0.05 * k;
+    const SimCaseSolution s = trackSimCase(makeSimEventFrameCase(cfg), offset);
+    EXPECT_TRUE(s.first.ok) << s.first.failure;
+    trans_mm.push_back(s.trans_err_mm), rot_deg.push_back(s.rot_err_deg);
+  }
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  const double t_med = median(trans_mm), r_med = median(rot_deg);
+  std::printf("[ tracker on sim ] C = 0.15, 11 instants: median %.3f mm, %.4f deg\n", t_med, r_med);
+  EXPECT_LE(t_med, 1.5 * 1.234);
+  EXPECT_LE(r_med, 1.5 * 0.0618);
 }
 
 TEST(EventTrackerOnSim, RecoversThePoseToUnderAMillimetreAtEveryInstantWithFineThresholds) {

@@ -70,6 +70,20 @@ void checkBootstrap(double seconds, unsigned seed, double fps, std::size_t max_f
               t_err * 100, T_ref_c_true.translation().norm() * 100);
   EXPECT_LT(rot_err, 0.2);
   EXPECT_LT(t_err, max_t_err);
+
+  // The parallax it reports is the RMS image motion the translation alone causes: each point at its
+  // depth, seen from the last frame with and without the translation.
+  const SE3 T_c_ref = T_ref_c.inverse();
+  double ss = 0;
+  int n = 0;
+  for (const KeyframePoint& p : ref.points) {
+    if (!(p.inv_depth > 0)) continue;
+    const Vec3 p_ref = camera().unproject(Vec2(p.u, p.v)) / p.inv_depth;
+    const Vec3 rotated = T_c_ref.so3() * p_ref;
+    ss += (camera().project(rotated + T_c_ref.translation()) - camera().project(rotated)).squaredNorm();
+    ++n;
+  }
+  EXPECT_NEAR(boot.parallax(), std::sqrt(ss / n), 1e-6 * boot.parallax());
   EXPECT_THROW(boot.add(f.times.back(), f.images.back()), std::logic_error);
 }
 

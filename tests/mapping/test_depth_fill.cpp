@@ -43,6 +43,10 @@ TEST(DepthFill, MedianOfNeighboursAndReach) {
   EXPECT_DOUBLE_EQ(rho[1], 0.5);  // only one within reach
   EXPECT_EQ(rho[2], 0.0);         // none within reach: unknown
   EXPECT_EQ(fillInverseDepth({{1, 1}}, {}, cfg)[0], 0.0);
+  // The reach is a distance in pixels: 4 px away is within 5, 6 px is not.
+  const std::vector<double> edge = fillInverseDepth({{200, 104}, {200, 106}}, {{200, 100, 0.7}}, cfg);
+  EXPECT_DOUBLE_EQ(edge[0], 0.7);
+  EXPECT_EQ(edge[1], 0.0);
 }
 
 TEST(DepthFill, ProjectsIntoTheKeyframe) {
