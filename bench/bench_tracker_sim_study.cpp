@@ -1,4 +1,4 @@
-// Accuracy study of the event tracker from one event frame (issue #4, acceptance 2): the simulated case
+// Accuracy study of the event tracker from one event frame: the simulated case
 // of tests/frontend/test_tracker_on_sim.cpp (plane at ~1 m, 240x180, keyframe with true depth, one event
 // frame 40 ms later, start 1 deg and 1 cm off), repeated with the keyframe at several times of the
 // hand-held motion and with three sensors: a DVS (hysteresis, the simulator's default and ESIM's), the

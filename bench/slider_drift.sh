@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Rotation drift of `eds run --frames-only` on the real ECD slider_depth (#5: target <= 2 deg) and on
+# Rotation drift of `eds run --frames-only` on the real ECD slider_depth  and on
 # simulated slides along the same ground truth, to separate the pipeline from the real data: the desk
 # and room presets seen through the slider's own calibration, through the same focal length without
 # distortion, and through a wider lens (fx 200). Drift: the rotation between the first and the last

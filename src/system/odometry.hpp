@@ -1,9 +1,9 @@
 #pragma once
-// The odometry pipeline. Today: the frame half of EDS (`eds run --frames-only`, issue #5): bootstrap on
-// frames, direct alignment of every frame to the newest keyframe (constant-velocity prediction),
-// keyframes by DSO's optical-flow criterion, mapping by depth transfer and k-d tree fill, and the
-// sliding-window photometric bundle adjustment (system/backend_worker.hpp: in its own thread by default).
-// The event front-end joins in issue #6.
+// The odometry pipeline: bootstrap on frames, event-rate tracking of every event frame against the
+// newest keyframe, direct alignment of every frame (seeded by the event pose; constant velocity with
+// --frames-only), keyframes by DSO's optical-flow criterion, mapping by depth transfer, k-d tree fill and
+// epipolar search, and the sliding-window photometric bundle adjustment (system/backend_worker.hpp: in
+// its own thread by default).
 #include <filesystem>
 #include <functional>
 #include <string>

@@ -23,7 +23,7 @@ struct Scene {
   sim::Motion motion{sim::handheldMotion(2.01, 9)};
   Frames frames;
   Scene() {
-    // A plane (no occlusions: occlusion handling inside the solve is still to come, see issue #5).
+    // A plane (no occlusions).
     sim::Scene scene = sim::makePreset("planar", motion, 9);
     scene.loadTextures();
     sim::SimConfig cfg;

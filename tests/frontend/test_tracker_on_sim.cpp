@@ -30,7 +30,7 @@ TEST(EventTrackerOnSim, RecoversThePoseFromOneDegreeAndOneCentimetreOff) {
               o.kf.points.size(), s.second.correlation, rot_deg, trans_mm,
               o.T_ef_kf_true.so3().angle() * 180 / M_PI, o.T_ef_kf_true.translation().norm() * 1000);
   EXPECT_TRUE(res.ok) << res.failure;
-  EXPECT_LT(rot_deg, 0.1);
+  EXPECT_LE(rot_deg, 1.5 * 0.0356);
   // Measured 0.82 mm / 0.036 deg at this instant; without the event frame's reversal compensation
   // 2.7 mm (a DVS pixel loses one event at each turn of its brightness, event_frame.hpp). The error
   // varies with the instant: the next test holds the median over 11 instants.
@@ -60,9 +60,8 @@ TEST(EventTrackerOnSim, MedianErrorOverElevenInstantsAtCoarseThresholds) {
 }
 
 TEST(EventTrackerOnSim, RecoversThePoseToUnderAMillimetreAtEveryInstantWithFineThresholds) {
-  // Issue #4's acceptance 2 with C = 0.05 and event frames of about the same span (90,000 events),
-  // at four instants of the motion. Over 11 instants (bench_tracker_sim_study 0.05 90000) the median
-  // is 0.27 mm / 0.017 deg and the worst 0.55 mm / 0.044 deg.
+  // C = 0.05 and event frames of about the same span (90,000 events), at four instants of the motion:
+  // measured 0.545 / 0.233 / 0.211 / 0.225 mm and 0.027 / 0.013 / 0.013 / 0.013 deg.
   const SE3 offset(SO3::exp(Vec3(0.6, -0.8, 0.0).normalized() * (M_PI / 180.0)), Vec3(0.006, -0.008, 0.0));
   for (const double t_kf : {0.0, 0.15, 0.3, 0.45}) {
     SimEventFrameCaseConfig cfg;
@@ -74,8 +73,9 @@ TEST(EventTrackerOnSim, RecoversThePoseToUnderAMillimetreAtEveryInstantWithFineT
     std::printf("[ tracker on sim ] C = 0.05, keyframe at %.2f s: error %.4f deg, %.3f mm\n", t_kf,
                 s.rot_err_deg, s.trans_err_mm);
     EXPECT_TRUE(s.first.ok) << s.first.failure;
-    EXPECT_LT(s.rot_err_deg, 0.1) << "keyframe at " << t_kf << " s";
-    EXPECT_LT(s.trans_err_mm, 1.0) << "keyframe at " << t_kf << " s";
+    // 1.5x the worst instant's figure.
+    EXPECT_LE(s.rot_err_deg, 1.5 * 0.027) << "keyframe at " << t_kf << " s";
+    EXPECT_LE(s.trans_err_mm, 1.5 * 0.545) << "keyframe at " << t_kf << " s";
   }
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "accuracy.hpp"
 #include "core/error.hpp"
 #include "eval/ate.hpp"
 #include "io/ply.hpp"
@@ -35,25 +36,22 @@ eval::AteResult evaluate(const OdometryResult& r, const Trajectory& gt, double u
   return evaluateTrajectory(r.frames, gt, until_s);
 }
 
-TEST(FramesOnly, EsimPlaneFirstSeconds) {
+// The whole ESIM sequence, poses as tracked and refined (what eds run writes).
+TEST(FramesOnly, EsimPlane) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
   const Sequence seq(dir);
   OdometryConfig cfg = framesOnly();
-  cfg.duration_s = 3.0;
   cfg.threaded_backend = false;  // deterministic
   const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
-  const eval::AteResult a = evaluate(r, seq.groundTruth(), 3.0);
-  std::printf(
-      "[ frames-only esim 3 s ] init %.2f s, %zu keyframes, ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
-      toSeconds(r.init_t - r.first_t), r.keyframes.size(), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
-  EXPECT_LE(a.trans.rmse, 0.003);
-  EXPECT_GE(a.coverage, 0.9);
   EXPECT_TRUE(r.failures.empty());
-  const eval::AteResult ar = evaluateTrajectory(r.frames_refined, seq.groundTruth(), 3.0);
-  std::printf("[ frames-only esim 3 s ] refined: ATE %.3f cm, rot %.3f deg\n", ar.trans.rmse * 100,
-              ar.rot.rmse);
-  EXPECT_LE(ar.trans.rmse, 0.003);
+  const eval::AteResult a = evaluate(r, seq.groundTruth());
+  const eval::AteResult ar = evaluateTrajectory(r.frames_refined, seq.groundTruth());
+  std::printf("[ frames-only esim ] init %.2f s, %zu keyframes\n", toSeconds(r.init_t - r.first_t),
+              r.keyframes.size());
+  test::expectAccuracy("ESIM, frames only, as tracked", a, {0.113, 0.201});
+  test::expectAccuracy("ESIM, frames only, refined", ar, {0.086, 0.100});
+  EXPECT_GE(ar.coverage, 0.95);
 }
 
 // Rotation from the first to the last pose of the estimate against the ground truth's (degrees).
@@ -63,18 +61,20 @@ double rotationDriftDeg(const Trajectory& est, const Trajectory& gt) {
   return (est_rel.so3() * gt_rel.so3().inverse()).angle() * 180.0 / M_PI;
 }
 
-// With the back-end in its own thread (the default), on real frames. Issue #5: ATE <= 3 cm, coverage
-// >= 90 %, rotation drift over the slide <= 2 deg. The slide is where the window's choice of the keyframe
+// Real frames with distortion, back-end in the tracking thread (deterministic). Rotation drift over the
+// slide: measured 1.14 deg with DSO's removal rule. The slide is where the window's choice of the keyframe
 // to drop shows (DSO's rule keeps a long baseline; dropping the oldest drifted 4.4 deg).
 TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
   EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
   const Sequence seq(dir);
   const Trajectory gt = seq.groundTruth();
-  const OdometryResult r = runOdometry(seq, framesOnly());
+  OdometryConfig cfg = framesOnly();
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
-  const eval::AteResult a = evaluate(r, gt);
+  const eval::AteResult a = evaluateTrajectory(r.frames_refined, gt);
   const double drift = rotationDriftDeg(r.frames_refined, gt);
-  OdometryConfig oldest = framesOnly();
+  OdometryConfig oldest = cfg;
   oldest.backend.removal = 0;
   const double drift_oldest = rotationDriftDeg(runOdometry(seq, oldest).frames_refined, gt);
   std::printf(
@@ -82,9 +82,9 @@ TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
       "%%, rotation drift %.2f deg (dropping the oldest keyframe: %.2f deg)\n",
       toSeconds(r.init_t - r.first_t), r.keyframes.size(), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100,
       drift, drift_oldest);
-  EXPECT_LE(a.trans.rmse, 0.03);
+  test::expectAccuracy("ECD slider_depth, frames only, refined", a, {0.382, 0.884});
   EXPECT_GE(a.coverage, 0.9);
-  EXPECT_LE(drift, 2.0);
+  EXPECT_LE(drift, 1.5 * 1.14);
   EXPECT_GE(drift_oldest, 3.0);
 }
 
@@ -96,7 +96,7 @@ double distanceToPlane(const sim::Plane& pl, const Vec3& p) {
   return (d - a * pl.u - b * pl.v).norm();
 }
 
-// Issue #5's case: the room preset along the first 8 s of the real poster_6dof motion (smoothed,
+// The room preset along the first 8 s of the real poster_6dof motion (smoothed,
 // σ = 50 ms), frames at 20 Hz.
 TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
@@ -138,8 +138,8 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
       a.trans.rmse * 100, a.coverage * 100, r.map.size(), med * 100, med / depth * 100, depth);
   EXPECT_GE(r.map.size(), 5000u);
   EXPECT_LE(med, 0.02 * depth);
-  EXPECT_LE(a.trans.rmse, 0.003);
   EXPECT_GE(a.coverage, 0.9);
+  test::expectAccuracy("room 8 s, frames only, no events, as tracked", a, {0.255, 0.121});
   // The refined trajectory (each pose through its keyframe's final pose): the back-end's later
   // refinement of the keyframes shows mostly in the rotation (here 0.089 -> 0.075 deg; with the window
   // dropping its oldest keyframe instead of by DSO's rule, 0.125 -> 0.069).
@@ -147,9 +147,8 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   const eval::AteResult ar = evaluateTrajectory(r.frames_refined, gt);
   std::printf("[ frames-only room 8 s ] refined: ATE %.3f cm, rot %.3f deg (as tracked: %.3f deg)\n",
               ar.trans.rmse * 100, ar.rot.rmse, a.rot.rmse);
-  EXPECT_LE(ar.trans.rmse, 0.003);
   EXPECT_LT(ar.rot.rmse, 0.9 * a.rot.rmse);
-  EXPECT_LE(ar.rot.rmse, 0.1);
+  test::expectAccuracy("room 8 s, frames only, no events, refined", ar, {0.174, 0.063});
   // What eds run writes: the map as PLY, read back; the refined trajectory as the main file.
   writeOdometryOutputs(dir / "out", r, cfg);
   EXPECT_EQ(readPly(dir / "out" / "map.ply").xyz.size(), r.map.size());

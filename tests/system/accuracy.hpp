@@ -1,0 +1,38 @@
+#pragma once
+// The bound every accuracy figure of the README is held to: at most 1.5x the value measured when the
+// figure was written (measured + 0.02 cm where that is larger, for the tiniest translations), for
+// translation and rotation alike, so that a doubled error or a rotation regression fails.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+#include "eval/ate.hpp"
+
+namespace eds::test {
+
+struct Measured {
+  double ate_cm = 0;   // translation RMSE, cm
+  double rot_deg = 0;  // rotation RMSE, degrees
+};
+
+inline double translationBoundCm(double measured_cm) {
+  return std::max(1.5 * measured_cm, measured_cm + 0.02);
+}
+
+inline std::string hz(double rate) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g Hz", rate);
+  return buf;
+}
+
+// Prints the result next to the measured figure and checks both bounds.
+inline void expectAccuracy(const std::string& what, const eval::AteResult& a, Measured m) {
+  std::printf("[ %s ] ATE %.3f cm (measured %.3f), rot %.3f deg (measured %.3f), coverage %.1f %%\n",
+              what.c_str(), a.trans.rmse * 100, m.ate_cm, a.rot.rmse, m.rot_deg, a.coverage * 100);
+  EXPECT_LE(a.trans.rmse * 100, translationBoundCm(m.ate_cm)) << what;
+  EXPECT_LE(a.rot.rmse, 1.5 * m.rot_deg) << what;
+}
+
+}  // namespace eds::test
