@@ -1,6 +1,7 @@
 #pragma once
 // For tests that need simulated frames: the 240x180 pinhole camera they use and a sink that keeps the
 // frames and depth maps the simulator renders (events dropped).
+#include <cstdint>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -29,6 +30,17 @@ struct FrameSink : sim::SimSink {
   std::vector<TimeNs> times;
   std::vector<cv::Mat> images, depths;
 };
+
+// What the system tests simulate: frames at 20 Hz, threshold noise 0.03 and 0.1 Hz of background
+// events per pixel.
+inline sim::SimConfig noisySimConfig(std::uint64_t seed) {
+  sim::SimConfig sc;
+  sc.fps = 20;
+  sc.events.sigma_C = 0.03;
+  sc.events.noise_rate_hz = 0.1;
+  sc.events.seed = seed;
+  return sc;
+}
 
 // Writes a simulated sequence to `dir` in the ECD layout (plain-text events, no depth maps) with the
 // test camera and 200 Hz ground truth, as `eds simulate` does.

@@ -24,12 +24,7 @@ const std::filesystem::path& roomSequence() {
     const sim::Motion motion{sim::handheldMotion(3.0, 5)};
     sim::Scene scene = sim::makePreset("room", motion, 5);
     scene.loadTextures();
-    sim::SimConfig sc;
-    sc.fps = 20;
-    sc.events.sigma_C = 0.03;
-    sc.events.noise_rate_hz = 0.1;
-    sc.events.seed = 5;
-    test::writeSimSequence(d, scene, motion, sc);
+    test::writeSimSequence(d, scene, motion, test::noisySimConfig(5));
     return d;
   }();
   return dir;

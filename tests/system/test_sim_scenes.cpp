@@ -27,12 +27,7 @@ std::filesystem::path sceneSequence(const std::string& preset, const std::filesy
       sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.05), 0.0, 8.0, traj_file.string())};
   sim::Scene scene = sim::makePreset(preset, motion, 1);
   scene.loadTextures();
-  sim::SimConfig sc;
-  sc.fps = 20;
-  sc.events.sigma_C = 0.03;
-  sc.events.noise_rate_hz = 0.1;
-  sc.events.seed = 1;
-  test::writeSimSequence(dir, scene, motion, sc);
+  test::writeSimSequence(dir, scene, motion, test::noisySimConfig(1));
   return done[preset] = dir;
 }
 
