@@ -4,11 +4,12 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"eds: Event-aided Direct Sparse Odometry"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "eds 0.1.0");
+  app.set_version_flag("--version", "eds " + eds::versionString());
   // Subcommands (one file each under apps/).
   eds::app::addInfoCommand(app);
   eds::app::addEvalCommand(app);

@@ -50,6 +50,23 @@ void BackendWorker::waitIdle() {
   cv_.wait(lock, [this] { return !working_ && queue_.empty(); });
 }
 
+void BackendWorker::finish() {
+  if (!threaded_) {
+    if (!finished_) finalSolve();
+    finished_ = true;
+    return;
+  }
+  std::unique_lock<std::mutex> lock(mutex_);
+  finish_ = true;
+  cv_.notify_all();
+  cv_.wait(lock, [this] { return finished_; });
+}
+
+void BackendWorker::finalSolve() {
+  window_.optimize();
+  window_.flush();
+}
+
 std::optional<TrackingReference> BackendWorker::takeReference() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::optional<TrackingReference> out;
@@ -60,7 +77,17 @@ std::optional<TrackingReference> BackendWorker::takeReference() {
 void BackendWorker::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+    cv_.wait(lock, [this] { return stop_ || !queue_.empty() || (finish_ && !finished_); });
+    if (queue_.empty() && finish_ && !finished_) {
+      working_ = true;
+      lock.unlock();
+      finalSolve();
+      lock.lock();
+      working_ = false;
+      finished_ = true;
+      cv_.notify_all();
+      continue;
+    }
     if (queue_.empty() && stop_) return;
     KeyframeJob job = std::move(queue_.front());
     queue_.pop_front();

@@ -61,6 +61,10 @@ class BackendWorker {
   void submit(KeyframeJob job);
   bool busy() const;
   void waitIdle();
+  // Waits for the queued keyframes, then converges the window once more and retires it (the last
+  // keyframes had fewer solves than the ones before them), on the worker's thread when it has one.
+  // The window's outputs are final afterwards; no keyframe may be submitted after it.
+  void finish();
   // The newest reference published since the last call, if any.
   std::optional<TrackingReference> takeReference();
   // After waitIdle(): the window (for outputs) and the timings.
@@ -69,6 +73,7 @@ class BackendWorker {
 
  private:
   void run();
+  void finalSolve();
   void process(KeyframeJob& job);
   void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b,
                     const std::vector<cv::Point>& px, const std::vector<ProjectedPoint>& proj,
@@ -84,7 +89,7 @@ class BackendWorker {
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<KeyframeJob> queue_;
-  bool working_ = false, stop_ = false;
+  bool working_ = false, stop_ = false, finish_ = false, finished_ = false;
   std::optional<TrackingReference> published_;
   std::thread thread_;
 };

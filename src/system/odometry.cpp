@@ -6,16 +6,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
+#include <deque>
+#include <limits>
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <unordered_map>
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
-#include "frontend/event_packets.hpp"
 #include "init/bootstrap.hpp"
-#include "io/ply.hpp"
 #include "system/event_frontend.hpp"
 #include "system/frame_frontend.hpp"
 #include "system/run_stats.hpp"
@@ -49,46 +47,24 @@ Trajectory refinedTrajectory(const Trajectory& traj, const std::vector<PoseAncho
 
 }  // namespace
 
-std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, double start_s, double duration_s,
-                                      double frame_rate) {
-  std::vector<std::size_t> out;
-  if (frames.empty()) return out;
-  const TimeNs t0 = frames.front().t + fromSeconds(start_s);
-  const TimeNs t1 = duration_s > 0 ? t0 + fromSeconds(duration_s) : std::numeric_limits<TimeNs>::max();
-  std::vector<std::size_t> in;
-  for (std::size_t i = 0; i < frames.size(); ++i)
-    if (frames[i].t >= t0 && frames[i].t <= t1) in.push_back(i);
-  if (!(frame_rate > 0) || in.empty()) return in;
-  const TimeNs step = fromSeconds(1.0 / frame_rate);
-  std::size_t j = 0;
-  for (TimeNs target = frames[in.front()].t; target <= frames[in.back()].t + step / 2; target += step) {
-    while (j + 1 < in.size() &&
-           std::llabs(frames[in[j + 1]].t - target) <= std::llabs(frames[in[j]].t - target))
-      ++j;
-    if (out.empty() || out.back() != in[j]) out.push_back(in[j]);
-  }
-  return out;
-}
-
 namespace {
 
-// The run: frames through the bootstrap and the frame front-end, event frames (when used) through the
-// event front-end, merged in time order.
-class Runner {
+// The pipeline: frames through the bootstrap and the frame front-end, event frames (when used) through
+// the event front-end, each given in time order.
+class Core {
  public:
-  Runner(const Sequence& seq, const OdometryConfig& cfg, OdometryResult& res)
-      : seq_(seq),
-        cfg_(cfg),
+  Core(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res)
+      : cfg_(cfg),
         res_(res),
-        und_(seq.camera()),
+        und_(camera),
         odo_(und_.pinhole(), cfg, res),
         boot_(und_.pinhole(), cfg.bootstrap),
         events_(und_.pinhole(), cfg.events) {}
 
-  void frame(std::size_t i) {
-    const TimeNs t = seq_.frames()[i].t;
+  // A raw 8-bit frame.
+  void frame(TimeNs t, const cv::Mat& raw) {
     cv::Mat img;
-    und_.undistortImage(seq_.loadFrame(i)).convertTo(img, CV_32F, 1.0 / 255.0);
+    und_.undistortImage(raw).convertTo(img, CV_32F, 1.0 / 255.0);
     ++res_.frames_in;
     last_t_ = t;
     if (!res_.initialized) {
@@ -114,7 +90,9 @@ class Runner {
   void eventFrame(const EventFrame& ef) {
     ++res_.event_frames;
     if (!res_.initialized) {
-      // Kept until the map exists, then tracked (poses from the first frame on).
+      // Kept until the map exists, then tracked (poses from the bootstrap's reference frame on: older
+      // ones are dropped at once, which bounds the buffer by the bootstrap's span).
+      pruneBuffered();
       buffered_.push_back({ef.t, ef.t_first, ef.t_last, ef.delta.clone()});
       if (boot_events_ && boot_events_->hasReference()) {
         if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
@@ -191,6 +169,12 @@ class Runner {
     if (n >= 1) events_.correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
   }
 
+  void pruneBuffered() {
+    const std::vector<BootstrapFrame>& bf = boot_.frames();
+    const TimeNs t0 = boot_.hasReference() && !bf.empty() ? bf.front().t : std::numeric_limits<TimeNs>::max();
+    std::erase_if(buffered_, [t0](const EventFrame& b) { return b.t < t0; });
+  }
+
   // During the bootstrap the events track against its reference (its current inverse depths; 1 at
   // first): their pose at the next frame is the bootstrap's hint. A new reference (a restart) is a new
   // world: the tracking starts again.
@@ -239,7 +223,6 @@ class Runner {
     res_.event_anchors.push_back({events_.referenceId(), events_.T_w_kf().inverse() * *T});
   }
 
-  const Sequence& seq_;
   const OdometryConfig& cfg_;
   OdometryResult& res_;
   Undistorter und_;
@@ -260,136 +243,245 @@ class Runner {
 
 }  // namespace
 
-OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress) {
-  const auto wall0 = Clock::now();
-  if (!seq.hasFrames())
-    throw InputError((seq.dir() / "images.txt").string(),
-                     "the odometry needs frames (keyframes come from them)");
-  if (cfg.use_events && !seq.hasEvents())
-    throw InputError((seq.dir() / "events.txt").string(),
-                     "no events in the sequence: run with --frames-only, or add events");
-  if (cfg.frame_rate < 0 || cfg.start_s < 0 || cfg.duration_s < 0)
-    throw std::invalid_argument("run: frame rate, start and duration must not be negative");
-  cfg.event_frame.validate();
-  OdometryResult res;
-  Runner run(seq, cfg, res);
-  const std::vector<std::size_t> idx =
-      selectFrames(seq.frames(), cfg.start_s, cfg.duration_s, cfg.frame_rate);
-  if (idx.empty())
-    throw InputError((seq.dir() / "images.txt").string(), "no frame in the requested time range");
-  res.first_t = seq.frames()[idx.front()].t;
-  const TimeNs t_end =
-      cfg.duration_s > 0 ? res.first_t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
-  std::size_t next = 0;  // next frame (index into idx)
-  const TimeNs t_last_frame = std::min(seq.frames()[idx.back()].t, t_end);
-  const double total_s = toSeconds(t_last_frame - res.first_t);
-  TimeNs t_reported = res.first_t;
-  auto report = [&](TimeNs t) {
-    if (!progress || t - t_reported < fromSeconds(0.1)) return;
-    t_reported = t;
-    progress(std::min(toSeconds(t - res.first_t), total_s), total_s);
-  };
-  if (cfg.use_events) {
-    auto src = seq.openEvents();
-    EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
-                              cfg.event_frame.stride(), cfg.event_frame.lookahead());
-    EventFrameBuilder builder(run.undistorter(), cfg.event_frame);
-    const EventArray* events = nullptr;
-    std::size_t begin = 0;
-    EventFrame ef;
-    while (packets.next(events, begin)) {
-      builder.build(*events, begin, ef, packets.base());
-      if (ef.t < res.first_t) continue;
-      if (ef.t > t_end) break;
-      while (next < idx.size() && seq.frames()[idx[next]].t <= ef.t) run.frame(idx[next++]);
-      run.eventFrame(ef);
-      report(ef.t);
+// The stream merge in front of the core (StreamConfig), and the listener's notifications.
+class Odometry::Impl {
+ public:
+  Impl(const CameraModel& camera, const OdometryConfig& cfg, OdometryListener* listener)
+      : wall0_(Clock::now()),
+        cfg_(validated(cfg, camera)),
+        listener_(listener),
+        core_(camera, cfg_, res_),
+        builder_(core_.undistorter(), cfg_.event_frame),
+        n_(static_cast<std::size_t>(cfg_.event_frame.num_events)),
+        stride_(cfg_.event_frame.stride()),
+        lookahead_(cfg_.event_frame.lookahead()) {}
+
+  void addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
+    checkOpen();
+    if (!cfg_.use_events) return;
+    end = std::min(end, ev.size());
+    const int w = core_.undistorter().raw().width, h = core_.undistorter().raw().height;
+    TimeNs prev = checked_t_;  // committed only when the whole chunk is valid
+    for (std::size_t i = begin; i < end; ++i) {
+      if (ev.t[i] < prev)
+        throw std::invalid_argument("Odometry::addEvents: event " + std::to_string(events_in_ + i - begin) +
+                                    " at t = " + std::to_string(ev.t[i]) + " ns is before the one before it (" +
+                                    std::to_string(prev) + " ns)");
+      if (ev.x[i] >= w || ev.y[i] >= h || (ev.p[i] != 1 && ev.p[i] != -1))
+        throw std::invalid_argument("Odometry::addEvents: event " + std::to_string(events_in_ + i - begin) +
+                                    " at pixel (" + std::to_string(ev.x[i]) + ", " + std::to_string(ev.y[i]) +
+                                    ") polarity " + std::to_string(ev.p[i]) + " is outside the " +
+                                    std::to_string(w) + "x" + std::to_string(h) + " sensor or not +-1");
+      prev = ev.t[i];
+    }
+    checked_t_ = prev;
+    events_in_ += end - begin;
+    for (std::size_t i = begin; i < end;) {
+      // Appends no more than the next packet needs, so that every packet is built as soon as it can
+      // be whatever the chunk size (the same event frames, in the same order).
+      const std::size_t need = pos_ + n_ + lookahead_ > buf_.size() ? pos_ + n_ + lookahead_ - buf_.size() : 1;
+      const std::size_t k = std::min(end - i, need);
+      append(ev, i, i + k);
+      i += k;
+      buildPackets(false);
+      dispatch(false);
     }
   }
-  while (next < idx.size()) {
-    run.frame(idx[next]);
-    report(seq.frames()[idx[next++]].t);
-  }
-  if (progress) progress(total_s, total_s);
-  TimeNs last_t = run.lastTime();
-  if (!res.events.empty()) last_t = std::max(last_t, res.events.back().t);
 
-  FrameFrontend& odo = run.frontend();
-  odo.worker().waitIdle();
-  SlidingWindow& window = odo.worker().window();
-  // The last keyframes had fewer solves than the ones before them: converge the window once more before
-  // writing it (ECD slider rotation drift, median over 5 start times: 2.05 -> 1.64 deg).
-  window.optimize();
-  window.flush();
-  const BackendTimings& bt = odo.worker().timings();
-  res.mapping_ms = bt.mapping_ms;
-  res.ba_ms = bt.ba_ms;
-  res.window_points = bt.window_points;
-  for (const RetiredKeyframe& k : window.retiredKeyframes()) res.keyframes.push_back({k.t, k.T_w_kf});
-  std::sort(res.keyframes.begin(), res.keyframes.end(),
-            [](const auto& a, const auto& b) { return a.t < b.t; });
-  res.map = window.retiredPoints();
-  res.frames_refined = refinedTrajectory(res.frames, res.frame_anchors, window.retiredKeyframes());
-  res.events_refined = refinedTrajectory(res.events, res.event_anchors, window.retiredKeyframes());
-  res.sequence_s = toSeconds(last_t - res.first_t);
-  res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();
-  res.peak_rss_mb = peakRssMb();
-  return res;
-}
+  void addFrame(TimeNs t, const cv::Mat& gray8) {
+    checkOpen();
+    const cv::Size size(core_.undistorter().raw().width, core_.undistorter().raw().height);
+    if (gray8.empty() || gray8.type() != CV_8UC1 || gray8.size() != size)
+      throw std::invalid_argument("Odometry::addFrame: frame at t = " + std::to_string(t) +
+                                  " ns is not an 8-bit gray image of the sensor's size " +
+                                  std::to_string(size.width) + "x" + std::to_string(size.height));
+    if (has_frame_in_ && t <= last_frame_in_)
+      throw std::invalid_argument("Odometry::addFrame: frame at t = " + std::to_string(t) +
+                                  " ns is not after the previous frame (" + std::to_string(last_frame_in_) +
+                                  " ns)");
+    has_frame_in_ = true;
+    last_frame_in_ = t;
+    frames_.push_back({t, gray8.clone()});
+    dispatch(false);
+  }
 
-void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
-                          const OdometryConfig& cfg) {
-  std::filesystem::create_directories(dir);
-  // The main files hold each pose through its keyframe's final pose (as DSO's results); *_live.txt the
-  // poses as they were tracked, what a live user had at the time.
-  writeTum(dir / "trajectory_frames.txt", r.frames_refined);
-  writeTum(dir / "trajectory_frames_live.txt", r.frames);
-  if (cfg.use_events) {
-    writeTum(dir / "trajectory_events.txt", r.events_refined);
-    writeTum(dir / "trajectory_events_live.txt", r.events);
+  const OdometryResult& finish() {
+    checkOpen();
+    finished_ = true;
+    buildPackets(true);
+    dispatch(true);
+    FrameFrontend& odo = core_.frontend();
+    odo.worker().finish();
+    const SlidingWindow& window = odo.worker().window();
+    const BackendTimings& bt = odo.worker().timings();
+    res_.mapping_ms = bt.mapping_ms;
+    res_.ba_ms = bt.ba_ms;
+    res_.window_points = bt.window_points;
+    for (const RetiredKeyframe& k : window.retiredKeyframes()) res_.keyframes.push_back({k.t, k.T_w_kf});
+    std::sort(res_.keyframes.begin(), res_.keyframes.end(),
+              [](const auto& a, const auto& b) { return a.t < b.t; });
+    res_.map = window.retiredPoints();
+    res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, window.retiredKeyframes());
+    res_.events_refined = refinedTrajectory(res_.events, res_.event_anchors, window.retiredKeyframes());
+    TimeNs last_t = core_.lastTime();
+    if (!res_.events.empty()) last_t = std::max(last_t, res_.events.back().t);
+    res_.sequence_s = has_first_ ? toSeconds(last_t - res_.first_t) : 0.0;
+    res_.wall_s = std::chrono::duration<double>(Clock::now() - wall0_).count();
+    res_.peak_rss_mb = peakRssMb();
+    return res_;
   }
-  writeTum(dir / "keyframes.txt", r.keyframes);
-  PointCloud pc;
-  for (const MapPoint& p : r.map) {
-    pc.xyz.push_back(p.p_w.cast<float>());
-    pc.intensity.push_back(p.intensity);
+
+  const OdometryResult& result() const { return res_; }
+
+ private:
+  struct PendingFrame {
+    TimeNs t;
+    cv::Mat image;
+  };
+
+  static const OdometryConfig& validated(const OdometryConfig& cfg, const CameraModel& camera) {
+    cfg.event_frame.validate();
+    if (camera.width <= 0 || camera.height <= 0)
+      throw std::invalid_argument("Odometry: the camera's sensor size is unknown");
+    if (!(cfg.stream.max_frame_wait_s >= 0) || cfg.stream.max_pending_frames < 0)
+      throw std::invalid_argument("Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
+    return cfg;
   }
-  writePly(dir / "map.ply", pc);
-  nlohmann::json j;
-  j["mode"] = cfg.use_events ? "run (events + frames)" : "run --frames-only";
-  j["initialized"] = r.initialized;
-  j["initialization"] = {{"t", r.initialized ? toSeconds(r.init_t) : 0.0},
-                         {"seconds_after_first_frame", r.initialized ? toSeconds(r.init_t - r.first_t) : 0.0},
-                         {"frames_used", r.init_frames},
-                         {"restarts", r.init_restarts}};
-  j["counts"] = {{"frames", r.frames_in},          {"poses", r.frames.size()},
-                 {"tracked", r.tracked},           {"failures", r.failures.size()},
-                 {"event_frames", r.event_frames}, {"event_frames_tracked", r.events_tracked},
-                 {"event_poses", r.events.size()}, {"keyframes", r.keyframes.size()},
-                 {"map_points", r.map.size()},     {"backend_waits", r.backend_waits}};
-  j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},
-                     {"event_tracking", timingStats(r.event_track_ms)},
-                     {"mapping", timingStats(r.mapping_ms)},
-                     {"backend_per_keyframe", timingStats(r.ba_ms)}};
-  std::vector<double> wp(r.window_points.begin(), r.window_points.end());
-  j["window_points"] = timingStats(wp);
-  j["wall_s"] = r.wall_s;
-  j["sequence_s"] = r.sequence_s;
-  j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;
-  j["peak_rss_mb"] = r.peak_rss_mb;
-  nlohmann::json fails = nlohmann::json::array();
-  for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
-  j["failures"] = fails;
-  j["config"] = {{"frame_rate", cfg.frame_rate},
-                 {"start_s", cfg.start_s},
-                 {"duration_s", cfg.duration_s},
-                 {"window", cfg.backend.window},
-                 {"points_per_keyframe", cfg.backend.points_per_keyframe},
-                 {"marginalize", cfg.backend.marginalize},
-                 {"threaded_backend", cfg.threaded_backend}};
-  std::ofstream out(dir / "summary.json");
-  if (!out) throw InputError((dir / "summary.json").string(), "cannot open for writing");
-  out << j.dump(2) << "\n";
+
+  void checkOpen() const {
+    if (finished_) throw std::logic_error("Odometry: used after finish()");
+  }
+
+  void append(const EventArray& ev, std::size_t a, std::size_t b) {
+    if (pos_ > (1u << 20)) compact();
+    buf_.t.insert(buf_.t.end(), ev.t.begin() + a, ev.t.begin() + b);
+    buf_.x.insert(buf_.x.end(), ev.x.begin() + a, ev.x.begin() + b);
+    buf_.y.insert(buf_.y.end(), ev.y.begin() + a, ev.y.begin() + b);
+    buf_.p.insert(buf_.p.end(), ev.p.begin() + a, ev.p.begin() + b);
+    if (b > a) newest_t_ = ev.t[b - 1];
+  }
+
+  // Drops the events before the next packet: the builder's per-pixel memory has run past them.
+  void compact() {
+    const auto d = static_cast<std::ptrdiff_t>(pos_);
+    buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
+    buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
+    buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
+    buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
+    pos_ = 0;
+    base_ += static_cast<std::uint64_t>(d);
+  }
+
+  // Every packet whose events (and lookahead) have arrived; at the end, every complete packet.
+  void buildPackets(bool at_end) {
+    while (buf_.size() >= pos_ + n_ + (at_end ? 0 : lookahead_)) {
+      EventFrame ef;
+      if (!spare_.empty()) {
+        ef = std::move(spare_.back());
+        spare_.pop_back();
+      }
+      builder_.build(buf_, pos_, ef, base_);
+      efs_.push_back(std::move(ef));
+      pos_ += stride_;
+    }
+  }
+
+  // Processes waiting items in time order while the order is certain (or a wait ran out).
+  void dispatch(bool at_end) {
+    while (!frames_.empty() || !efs_.empty()) {
+      if (!frames_.empty() && !efs_.empty()) {
+        if (frames_.front().t <= efs_.front().t)
+          processFrame();
+        else
+          processEventFrame();
+      } else if (!frames_.empty()) {
+        const bool events_past = !cfg_.use_events || (pos_ < buf_.size() && buf_.t[pos_] >= frames_.front().t);
+        if (!(at_end || events_past ||
+              frames_.size() > static_cast<std::size_t>(cfg_.stream.max_pending_frames)))
+          return;
+        processFrame();
+      } else {
+        const TimeNs t = efs_.front().t;
+        const bool frame_past = has_frame_in_ && last_frame_in_ >= t;
+        if (!(at_end || frame_past || newest_t_ - t > fromSeconds(cfg_.stream.max_frame_wait_s))) return;
+        processEventFrame();
+      }
+    }
+  }
+
+  void processFrame() {
+    const PendingFrame f = std::move(frames_.front());
+    frames_.pop_front();
+    if (!has_first_) has_first_ = true, res_.first_t = f.t;
+    last_frame_done_ = f.t;
+    core_.frame(f.t, f.image);
+    notify();
+  }
+
+  void processEventFrame() {
+    EventFrame ef = std::move(efs_.front());
+    efs_.pop_front();
+    // Before the first frame: nothing to track against yet (a recording's events before its frames).
+    if (has_first_ && ef.t >= res_.first_t) {
+      if (ef.t < last_frame_done_) {
+        // A frame after it went ahead (the events stalled): too late to be tracked in order.
+        res_.failures.push_back({ef.t, "event frame: arrived after a later frame was processed"});
+      } else {
+        core_.eventFrame(ef);
+      }
+      notify();
+    }
+    spare_.push_back(std::move(ef));
+  }
+
+  // Tells the listener what the last item produced.
+  void notify() {
+    if (!listener_) return;
+    if (res_.initialized && !told_init_) listener_->onInitialized(res_.init_t), told_init_ = true;
+    FrameFrontend& odo = core_.frontend();
+    if (res_.initialized && odo.referenceId() != told_kf_) {
+      told_kf_ = odo.referenceId();
+      listener_->onKeyframe({told_kf_, odo.reference().t, odo.T_w_kf(), odo.reference().points.size()});
+    }
+    for (; told_frames_ < res_.frames.size(); ++told_frames_)
+      listener_->onFramePose(res_.frames[told_frames_], res_.frame_anchors[told_frames_].kf_id);
+    for (; told_events_ < res_.events.size(); ++told_events_)
+      listener_->onEventPose(res_.events[told_events_], res_.event_anchors[told_events_].kf_id);
+    for (; told_failures_ < res_.failures.size(); ++told_failures_) listener_->onFailure(res_.failures[told_failures_]);
+  }
+
+  Clock::time_point wall0_;
+  const OdometryConfig cfg_;
+  OdometryListener* listener_;
+  OdometryResult res_;
+  Core core_;
+  EventFrameBuilder builder_;
+  std::size_t n_, stride_, lookahead_;
+  // Events not yet in a packet (from pos_ on) and the packets' lookahead; base_: stream index of buf_[0].
+  EventArray buf_;
+  std::size_t pos_ = 0, events_in_ = 0;
+  std::uint64_t base_ = 0;
+  // The newest event validated (the chunk being added) and the newest appended to buf_ (the waits
+  // measure from it, so that they do not depend on the chunk size).
+  TimeNs checked_t_ = std::numeric_limits<TimeNs>::min(), newest_t_ = std::numeric_limits<TimeNs>::min();
+  std::deque<PendingFrame> frames_;
+  std::deque<EventFrame> efs_;
+  std::vector<EventFrame> spare_;  // processed event frames, their images reused
+  bool has_frame_in_ = false, has_first_ = false, finished_ = false;
+  TimeNs last_frame_in_ = 0, last_frame_done_ = std::numeric_limits<TimeNs>::min();
+  bool told_init_ = false;
+  int told_kf_ = -1;
+  std::size_t told_frames_ = 0, told_events_ = 0, told_failures_ = 0;
+};
+
+Odometry::Odometry(const CameraModel& camera, const OdometryConfig& cfg, OdometryListener* listener)
+    : impl_(std::make_unique<Impl>(camera, cfg, listener)) {}
+Odometry::~Odometry() = default;
+void Odometry::addEvents(const EventArray& events, std::size_t begin, std::size_t end) {
+  impl_->addEvents(events, begin, end);
 }
+void Odometry::addFrame(TimeNs t, const cv::Mat& gray8) { impl_->addFrame(t, gray8); }
+const OdometryResult& Odometry::finish() { return impl_->finish(); }
+const OdometryResult& Odometry::result() const { return impl_->result(); }
 
 }  // namespace eds

@@ -4,8 +4,13 @@
 // --frames-only), keyframes by DSO's optical-flow criterion, mapping by depth transfer, k-d tree fill and
 // epipolar search, and the sliding-window photometric bundle adjustment (system/backend_worker.hpp: in
 // its own thread by default).
+//
+// `Odometry` is the pipeline as a push API (events and frames as they arrive, results as they are
+// produced); `runOdometry` drives it from a recorded sequence.
+#include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -36,7 +41,21 @@ struct FlowKeyframePolicyConfig {
   double lookahead_depth_ratio = 1.5;  // the flow part only where depths span this ratio (90th / 10th)
 };
 
+// How the two input streams of `Odometry` are merged into one time order. Items are processed in time
+// order (a frame before an event frame of the same time). A frame waits until the events have passed
+// its time stamp (the next event packet starts at or after it); an event frame waits until a frame at
+// or after its time has arrived. The waits are bounded so that a stalled stream neither stops the
+// other nor fills memory: an event frame goes ahead once the events have run `max_frame_wait_s` past
+// it, a frame once more than `max_pending_frames` frames wait. Data that arrives after later data of
+// the other stream was processed is still used when it is a frame, and dropped (as a failure) when it
+// is an event frame.
+struct StreamConfig {
+  double max_frame_wait_s = 0.2;  // event time: how long an event frame waits for a frame before it
+  int max_pending_frames = 8;     // frames waiting for events; one more and the oldest goes ahead
+};
+
 struct OdometryConfig {
+  StreamConfig stream;
   BootstrapConfig bootstrap;
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
   int prior_levels = 2;  // pyramid levels of the frame alignment when the event pose seeds it
@@ -106,6 +125,69 @@ struct OdometryResult {
   std::vector<int> window_points;                   // per keyframe, after the solve
   double wall_s = 0, sequence_s = 0;
   double peak_rss_mb = 0;
+};
+
+// A keyframe as the back-end published it (mapped and optimized once; later solves move it further).
+struct KeyframeUpdate {
+  int id = -1;
+  TimeNs t = 0;
+  SE3 T_w_kf;
+  std::size_t points = 0;  // window points seen from it
+};
+
+// Results as they are produced. Every callback runs on the thread that called the `Odometry` method
+// during which the result was produced (addEvents, addFrame or finish), before that call returns; the
+// back-end's own thread never calls the listener. A callback must not call back into the Odometry.
+class OdometryListener {
+ public:
+  virtual ~OdometryListener() = default;
+  virtual void onInitialized(TimeNs /*t*/) {}
+  // A frame's pose as tracked, and the keyframe it was tracked against (-1: none).
+  virtual void onFramePose(const StampedPose& /*T_w_f*/, int /*kf_id*/) {}
+  // An event frame's pose (its median event's time) as tracked.
+  virtual void onEventPose(const StampedPose& /*T_w_ef*/, int /*kf_id*/) {}
+  // A new tracking reference (keyframe) taken up by the trackers.
+  virtual void onKeyframe(const KeyframeUpdate& /*kf*/) {}
+  virtual void onFailure(const OdometryFailure& /*f*/) {}
+};
+
+// The odometry as a push API: events and frames go in as they arrive, poses come out as they are
+// produced (listener and/or polling `result()`), and `finish()` ends the run with the final window
+// solve, the refined trajectories, keyframe poses and map.
+//
+// Threading contract: an Odometry is used from one thread at a time (any thread; calls from several
+// threads must be serialized by the caller). The work happens inside the calling thread's addEvents /
+// addFrame / finish calls, except the back-end (mapping + bundle adjustment), which runs in a thread of
+// its own when `threaded_backend` is on and is joined by finish() or the destructor.
+//
+// Buffering: see StreamConfig. Memory is bounded by the waits (frames waiting for events, event frames
+// waiting for frames) and by the events of one packet and its lookahead; the only thing that grows
+// with the run's length is the result itself (the poses, and the keyframes and points the window
+// retires).
+class Odometry {
+ public:
+  // `camera`: the raw sensor's calibration (events and frames are in raw, distorted pixels).
+  Odometry(const CameraModel& camera, const OdometryConfig& cfg, OdometryListener* listener = nullptr);
+  ~Odometry();
+  Odometry(const Odometry&) = delete;
+  Odometry& operator=(const Odometry&) = delete;
+
+  // Events [begin, end) of `events` (end clamped to the size), in time order, also across calls.
+  // std::invalid_argument for an event out of order or outside the sensor. Ignored with
+  // use_events = false.
+  void addEvents(const EventArray& events, std::size_t begin = 0, std::size_t end = SIZE_MAX);
+  // An 8-bit grayscale frame of the sensor's size, exposed at time t (frames in increasing time);
+  // std::invalid_argument otherwise. The image is copied.
+  void addFrame(TimeNs t, const cv::Mat& gray8);
+  // Processes what is still waiting, converges the window and returns the whole result. Nothing may
+  // be added afterwards.
+  const OdometryResult& finish();
+  // The result so far (poses as tracked, counts, failures); complete after finish().
+  const OdometryResult& result() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 // `progress`, if given, is called now and then (at most every 0.1 s of sequence time) with the
