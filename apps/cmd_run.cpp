@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -23,6 +24,7 @@ struct RunArgs {
   bool frames_only = false;
   OdometryConfig cli;                                      // what the options wrote
   std::vector<std::pair<CLI::Option*, std::string>> keys;  // option -> parameter name
+  std::vector<std::string> sets;                           // --set KEY=VALUE, in order
 };
 
 void runRun(RunArgs& a) {
@@ -33,6 +35,7 @@ void runRun(RunArgs& a) {
   if (!a.config.empty()) loadOdometryConfig(a.config, cfg);
   for (const auto& [opt, key] : a.keys)
     if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
+  for (const std::string& kv : a.sets) setOdometryParameter(cfg, kv);
   if (a.frames_only) cfg.use_events = false;
   // A progress bar on a terminal (stderr), nothing when it is a file or a pipe.
   ProgressFn bar;
@@ -80,6 +83,9 @@ void addRunCommand(CLI::App& app) {
                   "Calibration instead of the sequence's own (ECD calib.txt, e.g. from `eds calibrate`, or "
                   "Kalibr YAML)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--set", a->sets,
+                  "KEY=VALUE: any parameter by its name in config_used.yaml (e.g. --set "
+                  "events.tracker.levels=4 --set backend.removal=oldest); applied last");
   cmd->add_flag("--frames-only", a->frames_only,
                 "Frames alone (no events): bootstrap, frame tracking, mapping, back-end");
   // Options that set a parameter: registered with its name, so that they override the --config file.
@@ -94,14 +100,28 @@ void addRunCommand(CLI::App& app) {
   param("--frame-rate", c.frame_rate, "frame_rate", "Keep the frames nearest this rate, Hz (0: all)");
   param("--start", c.start_s, "start_s", "Seconds to skip from the first frame");
   param("--duration", c.duration_s, "duration_s", "Seconds to process (0: to the end)");
-  param("--events", c.event_frame.num_events, "event_frame.num_events", "Events per event frame (N)");
-  param("--overlap", c.event_frame.overlap, "event_frame.overlap",
-        "Overlap of consecutive event frames, [0, 1)");
+  // Defaults that depend on the sensor's size (defaultOdometryConfig) say so instead of one number.
+  const auto sized = [&](const std::string& name, auto& field, const std::string& key, const std::string& help,
+                         const std::string& defaults) {
+    a->keys.emplace_back(cmd->add_option(name, field, help)->default_str(defaults), key);
+  };
+  sized("--events", c.event_frame.num_events, "event_frame.num_events", "Events per event frame (N)",
+        "20000 up to 240x180, 80000 from 640x480, scaled with the pixels between");
+  sized("--overlap", c.event_frame.overlap, "event_frame.overlap", "Overlap of consecutive event frames, [0, 1)",
+        "0.5 up to 240x180, 0.6 from 640x480");
   param("--window", c.backend.window, "backend.window", "Keyframes in the back-end window");
-  param("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
-        "Points each keyframe hosts in the back-end");
-  param("--window-removal", c.backend.removal, "backend.removal",
-        "Keyframe that leaves a full window: 1 DSO's rule (keeps a long baseline), 0 the oldest");
+  sized("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
+        "Points each keyframe hosts in the back-end", "300 up to 240x180, 600 from 640x480");
+  {
+    std::map<std::string, WindowRemoval> names;
+    for (const auto& [v, name] : enumNames(WindowRemoval{})) names.emplace(name, v);
+    a->keys.emplace_back(cmd->add_option("--window-removal", c.backend.removal,
+                                         "Keyframe that leaves a full window: dso, DSO's rule (keeps a long "
+                                         "baseline), or oldest")
+                             ->transform(CLI::CheckedTransformer(names))
+                             ->default_str("dso"),
+                         "backend.removal");
+  }
   param("--ba-iterations", c.backend.ba.iterations, "backend.ba.iterations",
         "Back-end iterations per keyframe");
   param("--init-parallax", c.bootstrap.min_parallax_px, "bootstrap.min_parallax_px",

@@ -4,7 +4,7 @@
 # and room presets seen through the slider's own calibration, through the same focal length without
 # distortion, and through a wider lens (fx 200). Drift: the rotation between the first and the last
 # pose (the slider does not rotate), as a rotation vector in the first camera's frame (y = yaw).
-# Extra arguments go to every `eds run` (e.g. --window 10, --window-removal 0, --config FILE). Then the
+# Extra arguments go to every `eds run` (e.g. --window 10, --window-removal oldest, --config FILE). Then the
 # real slider from five start times, and their median.
 # Usage: bench/slider_drift.sh [OUT_DIR] [eds run options]   (needs build/release and ../shared/data)
 set -euo pipefail

@@ -21,6 +21,7 @@
 
 #include "core/camera.hpp"
 #include "core/se3.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -31,6 +32,15 @@ struct BaConfig {
   double outlier_energy = 0.08;  // per-pattern RMS above this (after the solve): observation dropped
   double lambda_initial = 1e-4;
 };
+
+template <class V>
+void visitFields(V&& v, BaConfig& c) {
+  v("iterations", c.iterations);
+  v("huber", c.huber);
+  v("grad_weight_c", c.grad_weight_c);
+  v("outlier_energy", c.outlier_energy);
+  v("lambda_initial", c.lambda_initial);
+}
 
 struct BaFrame {
   SE3 T_w_c;

@@ -11,8 +11,8 @@ namespace eds {
 void BackendConfig::validate() const {
   if (window < 2) throw std::invalid_argument("backend: window must hold at least 2 keyframes");
   if (points_per_keyframe < 1) throw std::invalid_argument("backend: points_per_keyframe must be >= 1");
-  if (removal != 0 && removal != 1)
-    throw std::invalid_argument("backend: removal must be 0 (the oldest) or 1 (DSO's rule)");
+  if (removal != WindowRemoval::kOldest && removal != WindowRemoval::kDso)
+    throw std::invalid_argument("backend: removal must be oldest or dso");
   if (!(min_visible >= 0 && min_visible <= 1))
     throw std::invalid_argument("backend: min_visible must lie in [0, 1]");
 }
@@ -60,7 +60,7 @@ BaStats SlidingWindow::optimize() {
 
 int SlidingWindow::keyframeToRemove() const {
   const int F = static_cast<int>(frames_.size());
-  if (cfg_.removal == 0 || F < 3) return 0;
+  if (cfg_.removal == WindowRemoval::kOldest || F < 3) return 0;
   // Points of each keyframe that the newest still sees: their pattern lies inside its image. (DSO
   // counts only inlier residuals; on the ECD slider that dropped keyframes sooner and measured worse:
   // rotation drift median over 5 start times 1.64 -> 1.42 deg with the image test.)

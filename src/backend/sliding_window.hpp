@@ -11,8 +11,14 @@
 #include "core/camera.hpp"
 #include "core/time.hpp"
 #include "map/keyframe.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
+
+enum class WindowRemoval { kOldest, kDso };
+constexpr std::array<std::pair<WindowRemoval, std::string_view>, 2> enumNames(WindowRemoval) {
+  return {{{WindowRemoval::kOldest, "oldest"}, {WindowRemoval::kDso, "dso"}}};
+}
 
 struct BackendConfig {
   int window = 7;                 // keyframes
@@ -27,13 +33,13 @@ struct BackendConfig {
   // times, 1.42 -> 2.18 deg; ESIM frames 0.086 cm / 0.100 deg -> 0.083 / 0.094, events 0.113 / 0.124
   // -> 0.109 / 0.097; room frames and desk events at 5 Hz within 0.01 cm.
   bool marginalize = false;
-  // Which keyframe leaves a full window. 1, DSO's rule: the oldest one whose points have left the
+  // Which keyframe leaves a full window. kDso, DSO's rule: the oldest one whose points have left the
   // newest keyframe's view (fewer than min_visible of them inside its image), else the one maximizing
   // sqrt(d(i, newest)) · Σ_j 1 / d(i, j) over the camera distances d in the window; the newest two
   // always stay. The window keeps keyframes spread along the path, old ones included, and so a long
   // baseline: on a slide the rotation is observable only through second-order image terms that grow
-  // with the baseline. 0: the oldest leaves (as before). See README "Back-end window" for measurements.
-  int removal = 1;
+  // with the baseline. kOldest: the oldest leaves (docs/experiments.md compares them).
+  WindowRemoval removal = WindowRemoval::kDso;
   double min_visible = 0.05;
   // The tracking reference (pointsInNewest) holds only points whose error in the newest keyframe is an
   // inlier's (needed with DSO's rule: the window's older keyframes see behind today's occluders).
@@ -41,6 +47,17 @@ struct BackendConfig {
   BaConfig ba;
   void validate() const;
 };
+
+template <class V>
+void visitFields(V&& v, BackendConfig& c) {
+  v("window", c.window);
+  v("points_per_keyframe", c.points_per_keyframe);
+  v("marginalize", c.marginalize);
+  v("removal", c.removal);
+  v("min_visible", c.min_visible);
+  v("reference_inliers_only", c.reference_inliers_only);
+  v("ba", c.ba);
+}
 
 struct MapPoint {
   Vec3 p_w;

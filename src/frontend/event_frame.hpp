@@ -10,6 +10,7 @@
 
 #include "core/events.hpp"
 #include "core/undistorter.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -43,6 +44,16 @@ struct EventFrameConfig {
   std::size_t stride() const;     // events between consecutive packets' starts
   std::size_t lookahead() const;  // events after a packet that its build reads (0: compensation off)
 };
+
+template <class V>
+void visitFields(V&& v, EventFrameConfig& c) {
+  v("num_events", c.num_events);
+  v("overlap", c.overlap);
+  v("sigma_frac", c.sigma_frac);
+  v("blur", c.blur);
+  v("reversal_compensation", c.reversal_compensation);
+  v("compensation_lookahead", c.compensation_lookahead);
+}
 
 struct EventFrame {
   TimeNs t = 0;  // the median event's time

@@ -20,6 +20,7 @@
 #include "frontend/egm.hpp"
 #include "frontend/event_frame.hpp"
 #include "map/keyframe.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -35,6 +36,19 @@ struct EventTrackerConfig {
   double lambda_initial = 1e-3;
   void validate() const;
 };
+
+template <class V>
+void visitFields(V&& v, EventTrackerConfig& c) {
+  v("max_iterations", c.max_iterations);
+  v("levels", c.levels);
+  v("huber_initial", c.huber_initial);
+  v("adapt_huber", c.adapt_huber);
+  v("border", c.border);
+  v("set_margin", c.set_margin);
+  v("min_points", c.min_points);
+  v("min_correlation", c.min_correlation);
+  v("lambda_initial", c.lambda_initial);
+}
 
 // A Gaussian prior on the pose (a motion model's prediction). Its error is the left twist
 // e = log(T_ef_kf · T_prior⁻¹) = (translation, rotation), with standard deviations `sigma` in metres and

@@ -9,6 +9,7 @@
 #include "core/camera.hpp"
 #include "core/se3.hpp"
 #include "map/keyframe.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -21,6 +22,17 @@ struct FrameTrackerConfig {
   int min_residuals = 100;
   double convergence = 1e-8;  // a level ends when the cost falls by less than this fraction
 };
+
+template <class V>
+void visitFields(V&& v, FrameTrackerConfig& c) {
+  v("levels", c.levels);
+  v("max_iterations", c.max_iterations);
+  v("huber", c.huber);
+  v("affine", c.affine);
+  v("max_rmse", c.max_rmse);
+  v("min_residuals", c.min_residuals);
+  v("convergence", c.convergence);
+}
 
 struct FrameTrackResult {
   bool ok = false;

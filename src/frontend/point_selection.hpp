@@ -4,6 +4,7 @@
 // strongest edge. The same points feed the event tracker and (a subset) the back-end.
 #include <opencv2/core.hpp>
 #include <vector>
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -15,6 +16,15 @@ struct PointSelectionConfig {
   int max_points = 0;          // 0 = no cap; else the strongest over the whole image
   void validate() const;       // throws std::invalid_argument
 };
+
+template <class V>
+void visitFields(V&& v, PointSelectionConfig& c) {
+  v("tile", c.tile);
+  v("fraction", c.fraction);
+  v("min_gradient", c.min_gradient);
+  v("border", c.border);
+  v("max_points", c.max_points);
+}
 
 // Returns selected pixel coordinates (x, y), sorted by row then column.
 std::vector<cv::Point> selectPoints(const cv::Mat& grad_x, const cv::Mat& grad_y,

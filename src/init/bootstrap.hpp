@@ -24,6 +24,7 @@
 #include "frontend/point_selection.hpp"
 #include "init/geometric_init.hpp"
 #include "map/keyframe.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -47,6 +48,26 @@ struct BootstrapConfig {
   DepthFillConfig fill{.max_distance_px = 15, .neighbours = 3};
   void validate() const;
 };
+
+template <class V>
+void visitFields(V&& v, BootstrapConfig& c) {
+  v("points", c.points);
+  v("tracker", c.tracker);
+  v("ba", c.ba);
+  v("ba_levels", c.ba_levels);
+  v("depth_prior_weight", c.depth_prior_weight);
+  v("min_parallax_px", c.min_parallax_px);
+  v("min_points", c.min_points);
+  v("min_frames", c.min_frames);
+  v("max_frames", c.max_frames);
+  v("max_parallax_step_px", c.max_parallax_step_px);
+  v("max_rmse", c.max_rmse);
+  v("max_intensity", c.max_intensity);
+  v("min_intensity", c.min_intensity);
+  v("geometric", c.geometric);
+  v("geometric_init", c.geometric_init);
+  v("fill", c.fill);
+}
 
 struct BootstrapFrame {
   TimeNs t = 0;

@@ -12,6 +12,7 @@
 #include "core/camera.hpp"
 #include "core/se3.hpp"
 #include "mapping/depth_fill.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -26,6 +27,19 @@ struct GeometricInitConfig {
   double max_reproj_px = 2.0;     // triangulated points must reproject this well in both frames
   double min_parallax_deg = 1.5;  // median angle between the two rays of the triangulated points
 };
+
+template <class V>
+void visitFields(V&& v, GeometricInitConfig& c) {
+  v("max_features", c.max_features);
+  v("quality", c.quality);
+  v("min_distance", c.min_distance);
+  v("min_flow_px", c.min_flow_px);
+  v("min_tracks", c.min_tracks);
+  v("ransac_px", c.ransac_px);
+  v("planar_ratio", c.planar_ratio);
+  v("max_reproj_px", c.max_reproj_px);
+  v("min_parallax_deg", c.min_parallax_deg);
+}
 
 struct GeometricInitResult {
   bool planar = false;

@@ -7,6 +7,7 @@
 
 #include "core/camera.hpp"
 #include "core/se3.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -19,6 +20,12 @@ struct DepthFillConfig {
   double max_distance_px = 12.0;  // farther from every projected point: the pixel gets no depth (0)
   int neighbours = 3;             // inverse depth = median over this many nearest projections
 };
+
+template <class V>
+void visitFields(V&& v, DepthFillConfig& c) {
+  v("max_distance_px", c.max_distance_px);
+  v("neighbours", c.neighbours);
+}
 
 // Projects world points (with the keyframe pose T_w_kf) into a pinhole camera; keeps those in front
 // of the camera and inside the image.

@@ -11,6 +11,7 @@
 
 #include "core/camera.hpp"
 #include "core/se3.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -21,6 +22,15 @@ struct EpipolarSearchConfig {
   double min_line_px = 2.0;  // shorter search lines: depth unobservable, no result
   int max_samples = 400;     // per point (long lines are sampled more coarsely)
 };
+
+template <class V>
+void visitFields(V&& v, EpipolarSearchConfig& c) {
+  v("step_px", c.step_px);
+  v("max_rms", c.max_rms);
+  v("uniqueness", c.uniqueness);
+  v("min_line_px", c.min_line_px);
+  v("max_samples", c.max_samples);
+}
 
 struct SearchFrame {
   const cv::Mat* image = nullptr;  // CV_32F in [0, 1], undistorted

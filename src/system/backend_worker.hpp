@@ -16,6 +16,7 @@
 #include "frontend/point_selection.hpp"
 #include "mapping/depth_fill.hpp"
 #include "mapping/epipolar_search.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -28,6 +29,17 @@ struct MappingConfig {
   double search_max_disagreement = 0.2;  // two keyframes' inverse depths differ more: point dropped
   double min_intensity = 0.02, max_intensity = 0.98;  // black or saturated pixels are not selected
 };
+
+template <class V>
+void visitFields(V&& v, MappingConfig& c) {
+  v("points", c.points);
+  v("fill", c.fill);
+  v("search", c.search);
+  v("epipolar_search", c.epipolar_search);
+  v("search_max_disagreement", c.search_max_disagreement);
+  v("min_intensity", c.min_intensity);
+  v("max_intensity", c.max_intensity);
+}
 
 struct KeyframeJob {
   TimeNs t = 0;

@@ -10,6 +10,7 @@
 #include "frontend/event_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "mapping/depth_fill.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -30,6 +31,16 @@ struct MotionPriorConfig {
   void validate() const;
 };
 
+template <class V>
+void visitFields(V&& v, MotionPriorConfig& c) {
+  v("enabled", c.enabled);
+  v("sigma_translation", c.sigma_translation);
+  v("accel", c.accel);
+  v("sigma_rotation", c.sigma_rotation);
+  v("ang_accel", c.ang_accel);
+  v("max_gap_s", c.max_gap_s);
+}
+
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
   PointSelectionConfig points;  // selection on the keyframe's log gradient (as in tracking-only mode)
@@ -37,6 +48,15 @@ struct EventFrontendConfig {
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
   MotionPriorConfig motion_prior;
 };
+
+template <class V>
+void visitFields(V&& v, EventFrontendConfig& c) {
+  v("tracker", c.tracker);
+  v("points", c.points);
+  v("fill", c.fill);
+  v("depth_median_px", c.depth_median_px);
+  v("motion_prior", c.motion_prior);
+}
 
 class EventFrontend {
  public:

@@ -24,6 +24,7 @@
 #include "mapping/epipolar_search.hpp"
 #include "system/backend_worker.hpp"
 #include "system/event_frontend.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -41,6 +42,16 @@ struct FlowKeyframePolicyConfig {
   double lookahead_depth_ratio = 1.5;  // the flow part only where depths span this ratio (90th / 10th)
 };
 
+template <class V>
+void visitFields(V&& v, FlowKeyframePolicyConfig& c) {
+  v("flow_t", c.flow_t);
+  v("flow_rt", c.flow_rt);
+  v("min_in_view", c.min_in_view);
+  v("max_log_alpha", c.max_log_alpha);
+  v("lookahead", c.lookahead);
+  v("lookahead_depth_ratio", c.lookahead_depth_ratio);
+}
+
 // How the two input streams of `Odometry` are merged into one time order. Items are processed in time
 // order (a frame before an event frame of the same time). A frame waits until the events have passed
 // its time stamp (the next event packet starts at or after it); an event frame waits until a frame at
@@ -53,6 +64,12 @@ struct StreamConfig {
   double max_frame_wait_s = 0.2;  // event time: how long an event frame waits for a frame before it
   int max_pending_frames = 8;     // frames waiting for events; one more and the oldest goes ahead
 };
+
+template <class V>
+void visitFields(V&& v, StreamConfig& c) {
+  v("max_frame_wait_s", c.max_frame_wait_s);
+  v("max_pending_frames", c.max_pending_frames);
+}
 
 struct OdometryConfig {
   StreamConfig stream;
@@ -90,6 +107,29 @@ struct OdometryConfig {
   double start_s = 0;     // skip this much from the first frame
   double duration_s = 0;  // 0: to the end
 };
+
+template <class V>
+void visitFields(V&& v, OdometryConfig& c) {
+  v("stream", c.stream);
+  v("bootstrap", c.bootstrap);
+  v("frame_tracker", c.frame_tracker);
+  v("prior_levels", c.prior_levels);
+  v("frame_always_tries_cv", c.frame_always_tries_cv);
+  v("mapping", c.mapping);
+  v("backend", c.backend);
+  v("policy", c.policy);
+  v("threaded_backend", c.threaded_backend);
+  v("wait_for_keyframe", c.wait_for_keyframe);
+  v("use_events", c.use_events);
+  v("event_frame", c.event_frame);
+  v("events", c.events);
+  v("buffered_gate_translation", c.buffered_gate_translation);
+  v("buffered_gate_rotation_deg", c.buffered_gate_rotation_deg);
+  v("bootstrap_from_events", c.bootstrap_from_events);
+  v("frame_rate", c.frame_rate);
+  v("start_s", c.start_s);
+  v("duration_s", c.duration_s);
+}
 
 struct OdometryFailure {
   TimeNs t = 0;

@@ -3,107 +3,78 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <charconv>
+#include <type_traits>
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
 #include <string>
-#include <variant>
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/reflect.hpp"
 
 namespace eds {
 
 namespace {
 
-using Field = std::variant<double*, int*, bool*>;
+// One parameter, type-erased: read from and written to YAML.
+struct Field {
+  std::function<void(const YAML::Node&)> read;  // throws YAML::Exception or std::invalid_argument
+  std::function<YAML::Node()> write;
+};
 
-// The one list of parameters: both the reader and the writer walk it.
+// Collects every field of a configuration under its dotted name, through the structs' visitFields.
+class Collect {
+ public:
+  Collect(std::map<std::string, Field>& out, std::string prefix) : out_(out), prefix_(std::move(prefix)) {}
+
+  template <class T>
+  void operator()(const char* name, T& field) {
+    const std::string key = prefix_.empty() ? name : prefix_ + "." + name;
+    if constexpr (requires(Collect& c) { visitFields(c, field); }) {
+      Collect nested(out_, key);
+      visitFields(nested, field);
+    } else if constexpr (NamedEnum<T>) {
+      out_[key] = {[&field, key](const YAML::Node& n) { field = enumValue<T>(n.as<std::string>(), key); },
+                   [&field] { return YAML::Node(std::string(enumName(field))); }};
+    } else {
+      out_[key] = {[&field](const YAML::Node& n) { field = n.as<T>(); }, [&field] { return node(field); }};
+    }
+  }
+
+ private:
+  template <class E>
+  static E enumValue(const std::string& text, const std::string& key) {
+    std::string names;
+    for (const auto& [v, name] : enumNames(E{})) {
+      if (name == text) return v;
+      names += (names.empty() ? "" : " | ") + std::string(name);
+    }
+    throw std::invalid_argument("'" + key + "' must be one of " + names + ", not '" + text + "'");
+  }
+  template <class T>
+  static YAML::Node node(const T& v) {
+    if constexpr (std::is_floating_point_v<T>) {
+      // The shortest text that reads back as the same double (0.2, not 0.20000000000000001).
+      char buf[32];
+      const auto r = std::to_chars(buf, buf + sizeof buf, v);
+      return YAML::Node(std::string(buf, r.ptr));
+    } else {
+      return YAML::Node(v);
+    }
+  }
+  std::map<std::string, Field>& out_;
+  std::string prefix_;
+};
+
+// The one list of parameters: the reader, the writer and the overrides all walk it.
 std::map<std::string, Field> fields(OdometryConfig& c) {
   std::map<std::string, Field> f;
-  const auto sel = [&f](const std::string& p, PointSelectionConfig& s) {
-    f[p + ".tile"] = &s.tile, f[p + ".fraction"] = &s.fraction, f[p + ".min_gradient"] = &s.min_gradient;
-    f[p + ".border"] = &s.border, f[p + ".max_points"] = &s.max_points;
-  };
-  const auto fill = [&f](const std::string& p, DepthFillConfig& d) {
-    f[p + ".max_distance_px"] = &d.max_distance_px, f[p + ".neighbours"] = &d.neighbours;
-  };
-  BootstrapConfig& b = c.bootstrap;
-  sel("bootstrap.points", b.points);
-  f["bootstrap.depth_prior_weight"] = &b.depth_prior_weight,
-  f["bootstrap.min_parallax_px"] = &b.min_parallax_px;
-  f["bootstrap.min_points"] = &b.min_points, f["bootstrap.min_frames"] = &b.min_frames;
-  f["bootstrap.max_frames"] = &b.max_frames, f["bootstrap.max_parallax_step_px"] = &b.max_parallax_step_px;
-  f["bootstrap.max_rmse"] = &b.max_rmse, f["bootstrap.min_intensity"] = &b.min_intensity;
-  f["bootstrap.max_intensity"] = &b.max_intensity, f["bootstrap.geometric"] = &b.geometric;
-  f["bootstrap.ba_levels"] = &b.ba_levels, f["bootstrap.ba.iterations"] = &b.ba.iterations;
-  GeometricInitConfig& g = b.geometric_init;
-  f["bootstrap.geometric_init.max_features"] = &g.max_features,
-  f["bootstrap.geometric_init.quality"] = &g.quality;
-  f["bootstrap.geometric_init.min_distance"] = &g.min_distance,
-  f["bootstrap.geometric_init.min_flow_px"] = &g.min_flow_px;
-  f["bootstrap.geometric_init.min_tracks"] = &g.min_tracks,
-  f["bootstrap.geometric_init.ransac_px"] = &g.ransac_px;
-  f["bootstrap.geometric_init.planar_ratio"] = &g.planar_ratio;
-  f["bootstrap.geometric_init.max_reproj_px"] = &g.max_reproj_px;
-  f["bootstrap.geometric_init.min_parallax_deg"] = &g.min_parallax_deg;
-  FrameTrackerConfig& ft = c.frame_tracker;
-  f["frame_tracker.levels"] = &ft.levels, f["frame_tracker.max_iterations"] = &ft.max_iterations;
-  f["frame_tracker.huber"] = &ft.huber, f["frame_tracker.affine"] = &ft.affine,
-  f["frame_tracker.max_rmse"] = &ft.max_rmse;
-  f["frame_tracker.min_residuals"] = &ft.min_residuals, f["frame_tracker.convergence"] = &ft.convergence;
-  f["frame_always_tries_cv"] = &c.frame_always_tries_cv;
-  f["prior_levels"] = &c.prior_levels;
-  MappingConfig& m = c.mapping;
-  sel("mapping.points", m.points);
-  fill("mapping.fill", m.fill);
-  f["mapping.search.step_px"] = &m.search.step_px, f["mapping.search.max_rms"] = &m.search.max_rms;
-  f["mapping.search.uniqueness"] = &m.search.uniqueness,
-  f["mapping.search.min_line_px"] = &m.search.min_line_px;
-  f["mapping.search.max_samples"] = &m.search.max_samples, f["mapping.epipolar_search"] = &m.epipolar_search;
-  f["mapping.search_max_disagreement"] = &m.search_max_disagreement;
-  f["mapping.min_intensity"] = &m.min_intensity, f["mapping.max_intensity"] = &m.max_intensity;
-  BackendConfig& be = c.backend;
-  f["backend.window"] = &be.window, f["backend.points_per_keyframe"] = &be.points_per_keyframe;
-  f["backend.marginalize"] = &be.marginalize, f["backend.ba.iterations"] = &be.ba.iterations;
-  f["backend.removal"] = &be.removal, f["backend.min_visible"] = &be.min_visible;
-  f["backend.reference_inliers_only"] = &be.reference_inliers_only;
-  f["backend.ba.huber"] = &be.ba.huber, f["backend.ba.grad_weight_c"] = &be.ba.grad_weight_c;
-  f["backend.ba.outlier_energy"] = &be.ba.outlier_energy,
-  f["backend.ba.lambda_initial"] = &be.ba.lambda_initial;
-  f["policy.flow_t"] = &c.policy.flow_t, f["policy.flow_rt"] = &c.policy.flow_rt;
-  f["policy.min_in_view"] = &c.policy.min_in_view, f["policy.max_log_alpha"] = &c.policy.max_log_alpha;
-  f["policy.lookahead"] = &c.policy.lookahead,
-  f["policy.lookahead_depth_ratio"] = &c.policy.lookahead_depth_ratio;
-  f["threaded_backend"] = &c.threaded_backend, f["use_events"] = &c.use_events;
-  f["wait_for_keyframe"] = &c.wait_for_keyframe;
-  f["event_frame.num_events"] = &c.event_frame.num_events, f["event_frame.overlap"] = &c.event_frame.overlap;
-  f["event_frame.sigma_frac"] = &c.event_frame.sigma_frac, f["event_frame.blur"] = &c.event_frame.blur;
-  f["event_frame.reversal_compensation"] = &c.event_frame.reversal_compensation;
-  f["event_frame.compensation_lookahead"] = &c.event_frame.compensation_lookahead;
-  EventTrackerConfig& et = c.events.tracker;
-  f["events.tracker.max_iterations"] = &et.max_iterations, f["events.tracker.levels"] = &et.levels;
-  f["events.tracker.huber_initial"] = &et.huber_initial, f["events.tracker.adapt_huber"] = &et.adapt_huber;
-  f["events.tracker.set_margin"] = &et.set_margin;
-  f["events.tracker.border"] = &et.border, f["events.tracker.min_points"] = &et.min_points;
-  f["events.tracker.min_correlation"] = &et.min_correlation,
-  f["events.tracker.lambda_initial"] = &et.lambda_initial;
-  sel("events.points", c.events.points);
-  fill("events.fill", c.events.fill);
-  f["events.depth_median_px"] = &c.events.depth_median_px;
-  MotionPriorConfig& mp = c.events.motion_prior;
-  f["events.motion_prior.enabled"] = &mp.enabled;
-  f["events.motion_prior.sigma_translation"] = &mp.sigma_translation,
-  f["events.motion_prior.accel"] = &mp.accel;
-  f["events.motion_prior.sigma_rotation"] = &mp.sigma_rotation,
-  f["events.motion_prior.ang_accel"] = &mp.ang_accel;
-  f["events.motion_prior.max_gap_s"] = &mp.max_gap_s;
-  f["bootstrap_from_events"] = &c.bootstrap_from_events;
-  f["buffered_gate_translation"] = &c.buffered_gate_translation;
-  f["buffered_gate_rotation_deg"] = &c.buffered_gate_rotation_deg;
-  f["frame_rate"] = &c.frame_rate, f["start_s"] = &c.start_s, f["duration_s"] = &c.duration_s;
+  Collect collect(f, "");
+  visitFields(collect, c);
   return f;
 }
 
@@ -139,9 +110,11 @@ void loadOdometryConfig(const std::filesystem::path& file, OdometryConfig& cfg) 
     const std::string where = "line " + std::to_string(node.Mark().line + 1) + ": ";
     if (it == f.end()) throw InputError(file.string(), where + "unknown parameter '" + key + "'");
     try {
-      std::visit([&node](auto* p) { *p = node.as<std::remove_pointer_t<decltype(p)>>(); }, it->second);
+      it->second.read(node);
     } catch (const YAML::Exception&) {
       throw InputError(file.string(), where + "bad value for '" + key + "'");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file.string(), where + e.what());
     }
   }
 }
@@ -159,7 +132,7 @@ void saveOdometryConfig(const std::filesystem::path& file, const OdometryConfig&
       if (!node[parts[i]]) node[parts[i]] = YAML::Node(YAML::NodeType::Map);
       node.reset(node[parts[i]]);
     }
-    std::visit([&](auto* p) { node[parts.back()] = *p; }, field);
+    node[parts.back()] = field.write();
   }
   std::ofstream out(file);
   if (!out) throw InputError(file.string(), "cannot open for writing");
@@ -173,7 +146,29 @@ void copyOdometryParameter(const OdometryConfig& from, OdometryConfig& to, const
   const auto a = f_from.find(key);
   const auto b = f_to.find(key);
   if (a == f_from.end() || b == f_to.end()) throw std::invalid_argument("unknown parameter '" + key + "'");
-  std::visit([&](auto* dst) { *dst = *std::get<decltype(dst)>(a->second); }, b->second);
+  b->second.read(a->second.write());
+}
+
+void setOdometryParameter(OdometryConfig& cfg, const std::string& assignment) {
+  const std::size_t eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw std::invalid_argument("expected KEY=VALUE (for example backend.window=9), not '" + assignment + "'");
+  const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
+  auto f = fields(cfg);
+  const auto it = f.find(key);
+  if (it == f.end()) throw std::invalid_argument("unknown parameter '" + key + "' (config_used.yaml lists them)");
+  try {
+    it->second.read(YAML::Load(value));
+  } catch (const YAML::Exception&) {
+    throw std::invalid_argument("bad value '" + value + "' for '" + key + "'");
+  }
+}
+
+std::vector<std::string> odometryParameterNames() {
+  OdometryConfig c;
+  std::vector<std::string> names;
+  for (const auto& kv : fields(c)) names.push_back(kv.first);
+  return names;
 }
 
 OdometryConfig defaultOdometryConfig(int width, int height) {

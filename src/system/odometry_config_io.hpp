@@ -4,6 +4,7 @@
 // used (config_used.yaml), defaults included.
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "system/odometry.hpp"
 
@@ -22,5 +23,10 @@ void loadOdometryConfig(const std::filesystem::path& file, OdometryConfig& cfg);
 void saveOdometryConfig(const std::filesystem::path& file, const OdometryConfig& cfg);
 // Copies one parameter by its dotted name (std::invalid_argument if there is no such parameter).
 void copyOdometryParameter(const OdometryConfig& from, OdometryConfig& to, const std::string& key);
+// Sets one parameter from "KEY=VALUE" (a YAML value: 9, 0.5, true, dso); std::invalid_argument naming
+// the key for an unknown key or a bad value.
+void setOdometryParameter(OdometryConfig& cfg, const std::string& assignment);
+// Every parameter's dotted name, sorted.
+std::vector<std::string> odometryParameterNames();
 
 }  // namespace eds

@@ -38,7 +38,7 @@ TEST(SlidingWindow, DsoRuleDropsTheKeyframeCrowdedByItsNeighbours) {
   const std::vector<double> xs = {0.0, 0.1, 0.2, 0.25, 0.4, 0.5, 0.6, 0.7};
   const SlidingWindow w = windowAlong(xs, cfg, std::vector<double>(xs.size(), 50.0));
   EXPECT_EQ(w.keyframeToRemove(), 2);
-  cfg.removal = 0;
+  cfg.removal = WindowRemoval::kOldest;
   EXPECT_EQ(windowAlong(xs, cfg, std::vector<double>(xs.size(), 50.0)).keyframeToRemove(), 0);
 }
 
@@ -116,7 +116,7 @@ TEST(SlidingWindow, RejectsBadRemovalSettings) {
   cfg.min_visible = 1.5;
   EXPECT_THROW(cfg.validate(), std::invalid_argument);
   cfg.min_visible = 0.05;
-  cfg.removal = 2;
+  cfg.removal = static_cast<WindowRemoval>(2);
   EXPECT_THROW(cfg.validate(), std::invalid_argument);
 }
 

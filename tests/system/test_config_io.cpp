@@ -1,7 +1,11 @@
 // Parameters by name: config_used.yaml round-trips, a --config file overrides, bad files name the line.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "core/error.hpp"
 #include "system/odometry_config_io.hpp"
@@ -9,6 +13,124 @@
 
 namespace eds {
 namespace {
+
+template <class T>
+constexpr bool kNested = requires(T& t) { visitFields([](const char*, auto&) {}, t); };
+
+// Every configuration struct reached from OdometryConfig lists all of its members in visitFields.
+struct CheckListed {
+  std::string path;
+  std::vector<std::string>* problems;
+  template <class T>
+  void operator()(const char* name, T& field) {
+    if constexpr (kNested<T>) check(path + name, field);
+  }
+  template <class T>
+  void check(const std::string& where, T& cfg) {
+    std::size_t listed = 0;
+    visitFields([&listed](const char*, auto&) { ++listed; }, cfg);
+    if (listed != fieldCount<T>())
+      problems->push_back(where + ": " + std::to_string(fieldCount<T>()) + " members, " + std::to_string(listed) +
+                          " listed in visitFields");
+    CheckListed nested{where + ".", problems};
+    visitFields(nested, cfg);
+  }
+};
+
+// Every leaf's value as text, by dotted name.
+struct Dump {
+  std::string path;
+  std::map<std::string, std::string>* out;
+  template <class T>
+  void operator()(const char* name, T& field) {
+    if constexpr (kNested<T>) {
+      Dump nested{path + name + ".", out};
+      visitFields(nested, field);
+    } else if constexpr (std::is_enum_v<T>) {
+      (*out)[path + name] = std::to_string(static_cast<int>(field));
+    } else {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.17g", static_cast<double>(field));
+      (*out)[path + name] = buf;
+    }
+  }
+};
+
+// Moves every leaf off its default: numbers by a field-specific amount, flags flipped, enumerations to
+// their next value.
+struct Perturb {
+  int k = 0;
+  template <class T>
+  void operator()(const char*, T& field) {
+    ++k;
+    if constexpr (kNested<T>) {
+      visitFields(*this, field);
+    } else if constexpr (std::is_same_v<T, bool>) {
+      field = !field;
+    } else if constexpr (std::is_enum_v<T>) {
+      const auto names = enumNames(T{});
+      for (std::size_t i = 0; i < names.size(); ++i)
+        if (names[i].first == field) {
+          field = names[(i + 1) % names.size()].first;
+          break;
+        }
+    } else if constexpr (std::is_integral_v<T>) {
+      field += 1 + k % 7;
+    } else {
+      field = field * 1.5 + 0.001 * k + 0.125;
+    }
+  }
+};
+
+std::map<std::string, std::string> dump(OdometryConfig& c) {
+  std::map<std::string, std::string> m;
+  Dump d{"", &m};
+  visitFields(d, c);
+  return m;
+}
+
+TEST(OdometryConfigIo, EveryMemberOfEveryConfigurationStructIsListed) {
+  std::vector<std::string> problems;
+  OdometryConfig c;
+  CheckListed{"", &problems}.check("OdometryConfig", c);
+  for (const std::string& p : problems) ADD_FAILURE() << p;
+  EXPECT_GT(dump(c).size(), 120u);
+}
+
+TEST(OdometryConfigIo, EveryParameterSurvivesTheFileAtANonDefaultValue) {
+  const auto dir = test::tempDir("config_all");
+  OdometryConfig defaults, a;
+  Perturb perturb;
+  visitFields(perturb, a);
+  const auto d = dump(defaults), va = dump(a);
+  ASSERT_EQ(d.size(), va.size());
+  for (const auto& [key, value] : va) EXPECT_NE(value, d.at(key)) << key << " kept its default";
+  saveOdometryConfig(dir / "all.yaml", a);
+  OdometryConfig b;
+  loadOdometryConfig(dir / "all.yaml", b);
+  const auto vb = dump(b);
+  for (const auto& [key, value] : va) EXPECT_EQ(vb.at(key), value) << key;
+  // The names the file uses are the ones --set and odometryParameterNames give.
+  const std::vector<std::string> names = odometryParameterNames();
+  EXPECT_EQ(names.size(), va.size());
+  for (const std::string& n : names) EXPECT_TRUE(va.count(n)) << n;
+}
+
+TEST(OdometryConfigIo, SetTakesAnyParameterByNameAndNamedValues) {
+  OdometryConfig c;
+  setOdometryParameter(c, "bootstrap.tracker.levels=5");
+  setOdometryParameter(c, "backend.removal=oldest");
+  setOdometryParameter(c, "events.motion_prior.enabled=false");
+  setOdometryParameter(c, "event_frame.overlap=0.25");
+  EXPECT_EQ(c.bootstrap.tracker.levels, 5);
+  EXPECT_EQ(c.backend.removal, WindowRemoval::kOldest);
+  EXPECT_FALSE(c.events.motion_prior.enabled);
+  EXPECT_DOUBLE_EQ(c.event_frame.overlap, 0.25);
+  EXPECT_THROW(setOdometryParameter(c, "backend.removal=newest"), std::invalid_argument);
+  EXPECT_THROW(setOdometryParameter(c, "backend.window=many"), std::invalid_argument);
+  EXPECT_THROW(setOdometryParameter(c, "backend.windows=3"), std::invalid_argument);
+  EXPECT_THROW(setOdometryParameter(c, "backend.window"), std::invalid_argument);
+}
 
 TEST(OdometryConfigIo, RoundTripsEveryParameter) {
   const auto dir = test::tempDir("config_io");
@@ -38,10 +160,12 @@ TEST(OdometryConfigIo, RoundTripsEveryParameter) {
 
 TEST(OdometryConfigIo, PartialFileOverridesOnlyWhatItNames) {
   const auto dir = test::tempDir("config_partial");
-  std::ofstream(dir / "c.yaml") << "backend:\n  window: 9\npolicy: {flow_t: 0.03}\n";
+  std::ofstream(dir / "c.yaml") << "backend:\n  window: 9\npolicy: {flow_t: 0.03}\n"
+                                  "bootstrap: {tracker: {levels: 3}}\n";
   OdometryConfig c;
   loadOdometryConfig(dir / "c.yaml", c);
   EXPECT_EQ(c.backend.window, 9);
+  EXPECT_EQ(c.bootstrap.tracker.levels, 3);
   EXPECT_DOUBLE_EQ(c.policy.flow_t, 0.03);
   EXPECT_EQ(c.backend.points_per_keyframe, OdometryConfig{}.backend.points_per_keyframe);
   OdometryConfig d;

@@ -75,7 +75,7 @@ TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
   const eval::AteResult a = evaluateTrajectory(r.frames_refined, gt);
   const double drift = rotationDriftDeg(r.frames_refined, gt);
   OdometryConfig oldest = cfg;
-  oldest.backend.removal = 0;
+  oldest.backend.removal = WindowRemoval::kOldest;
   const double drift_oldest = rotationDriftDeg(runOdometry(seq, oldest).frames_refined, gt);
   std::printf(
       "[ frames-only slider_depth ] init %.2f s, %zu keyframes, ATE %.3f cm, rot %.3f deg, coverage %.1f "
