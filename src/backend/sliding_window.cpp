@@ -90,8 +90,7 @@ int SlidingWindow::keyframeToRemove() const {
 
 void SlidingWindow::removeKeyframe(int m) {
   if (cfg_.marginalize) prior_ = ba_.marginalize(frames_, points_, &prior_, m);
-  retired_kf_.push_back({ids_[m], times_[m], frames_[m].T_w_c});
-  retirePointsOf(m);
+  retireKeyframe(m);
   // Erase the points hosted in m and the observations in m; shift indices above m down.
   std::vector<BaPoint> kept;
   kept.reserve(points_.size());
@@ -121,11 +120,15 @@ void SlidingWindow::retirePointsOf(int f) {
   }
 }
 
+void SlidingWindow::retireKeyframe(int f) {
+  RetiredKeyframe k{ids_[f], times_[f], frames_[f].T_w_c, {}, pointsIn(f)};
+  frames_[f].image.convertTo(k.image, CV_8U, 255.0);
+  retired_kf_.push_back(std::move(k));
+  retirePointsOf(f);
+}
+
 void SlidingWindow::flush() {
-  for (int f = 0; f < static_cast<int>(frames_.size()); ++f) {
-    retired_kf_.push_back({ids_[f], times_[f], frames_[f].T_w_c});
-    retirePointsOf(f);
-  }
+  for (int f = 0; f < static_cast<int>(frames_.size()); ++f) retireKeyframe(f);
 }
 
 const BaFrame* SlidingWindow::frame(int id) const {
@@ -134,11 +137,10 @@ const BaFrame* SlidingWindow::frame(int id) const {
   return nullptr;
 }
 
-std::vector<KeyframePoint> SlidingWindow::pointsInNewest() const {
+std::vector<KeyframePoint> SlidingWindow::pointsIn(int f) const {
   std::vector<KeyframePoint> out;
-  if (frames_.empty()) return out;
-  const SE3 T_n_w = frames_.back().T_w_c.inverse();
-  const int newest = static_cast<int>(frames_.size()) - 1;
+  if (f < 0 || f >= size()) return out;
+  const SE3 T_n_w = frames_[f].T_w_c.inverse();
   Eigen::Matrix<double, 8, 1> r;
   for (const BaPoint& p : points_) {
     if (p.outlier || !(p.inv_depth > 0)) continue;
@@ -147,11 +149,11 @@ std::vector<KeyframePoint> SlidingWindow::pointsInNewest() const {
     if (q.z() <= 1e-6) continue;
     const double u = cam_.fx * q.x() / q.z() + cam_.cx, v = cam_.fy * q.y() / q.z() + cam_.cy;
     if (u < 2 || v < 2 || u > cam_.width - 3 || v > cam_.height - 3) continue;
-    // Only what the newest keyframe sees (its photometric error there is an inlier's), as DSO builds
+    // Only what keyframe f sees (its photometric error there is an inlier's), as DSO builds
     // its tracking reference: a point hidden behind a nearer surface would give the trackers that
     // surface's texture at the hidden point's depth.
-    if (cfg_.reference_inliers_only && p.host != newest &&
-        !(ba_.evaluate(frames_, p, newest, r, nullptr) &&
+    if (cfg_.reference_inliers_only && p.host != f &&
+        !(ba_.evaluate(frames_, p, f, r, nullptr) &&
           std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy))
       continue;
     KeyframePoint kp;

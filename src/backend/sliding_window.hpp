@@ -64,10 +64,14 @@ struct MapPoint {
   float intensity = 0;  // host image intensity in [0, 1]
 };
 
+// A keyframe that left the window, at its final pose, with what a later run needs to track against it
+// (eds track --reference): its image and the window's points seen from it.
 struct RetiredKeyframe {
   int id = 0;
   TimeNs t = 0;
   SE3 T_w_kf;
+  cv::Mat image;                      // CV_8U, undistorted (the window's image, rounded)
+  std::vector<KeyframePoint> points;  // u, v, inv_depth only
 };
 
 class SlidingWindow {
@@ -92,7 +96,9 @@ class SlidingWindow {
   const BaFrame* frame(int id) const;
   // Points of the window in the newest keyframe's pixel grid, with inverse depths there (for the
   // trackers and for mapping a new keyframe).
-  std::vector<KeyframePoint> pointsInNewest() const;
+  std::vector<KeyframePoint> pointsInNewest() const { return pointsIn(size() - 1); }
+  // The same in the pixel grid of frames()[f].
+  std::vector<KeyframePoint> pointsIn(int f) const;
   std::vector<Vec3> worldPoints() const;
   int numPoints() const;
   int numPriorFrames() const { return static_cast<int>(prior_.frames.size()); }
@@ -105,6 +111,7 @@ class SlidingWindow {
  private:
   void removeKeyframe(int m);
   void retirePointsOf(int frame_index);
+  void retireKeyframe(int frame_index);
 
   CameraModel cam_;
   BackendConfig cfg_;

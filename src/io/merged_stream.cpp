@@ -4,8 +4,8 @@
 
 namespace eds {
 
-MergedStream::MergedStream(const Sequence& seq, std::size_t max_chunk)
-    : seq_(seq), source_(seq.hasEvents() ? seq.openEvents() : nullptr), max_chunk_(max_chunk) {
+MergedStream::MergedStream(const Sequence& seq, std::size_t max_chunk, bool with_events)
+    : seq_(seq), source_(with_events && seq.hasEvents() ? seq.openEvents() : nullptr), max_chunk_(max_chunk) {
   pending_.reserve(max_chunk_);
 }
 

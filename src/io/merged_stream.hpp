@@ -12,7 +12,8 @@ class MergedStream {
  public:
   enum class Kind { kEvents, kFrame, kEnd };
 
-  explicit MergedStream(const Sequence& seq, std::size_t max_chunk = 50'000);
+  // with_events = false: the frames alone (the events are not read).
+  explicit MergedStream(const Sequence& seq, std::size_t max_chunk = 50'000, bool with_events = true);
 
   // kEvents: `events` is cleared and filled with the next chunk (time-ordered, all <= next frame).
   // kFrame: `frame_index` is the index into seq.frames() of the next frame.

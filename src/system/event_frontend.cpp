@@ -121,6 +121,7 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
   SE3 T = T_init;
   Vec6 nu = nu_;
   const TrackResult tr = tracker_.track(ef, T, nu, levels, motion);
+  last_correlation_ = tr.correlation;
   if (std::getenv("EDS_DEBUG")) {
     const Vec6 dev = motion ? Vec6((T * motion->T_ef_kf.inverse()).log()) : Vec6::Zero();
     std::fprintf(stderr,

@@ -81,6 +81,8 @@ class EventFrontend {
   // make the motion prior.
   void correct(TimeNs t, const SE3& T_w_c);
   int numPoints() const { return static_cast<int>(tracker_.numPoints()); }
+  // The last solve's correlation n̂·n of the event frame with the model's prediction.
+  double lastCorrelation() const { return last_correlation_; }
 
  private:
   CameraModel cam_;
@@ -94,6 +96,7 @@ class EventFrontend {
   TimeNs t_last_ = -1, t_prev_ = -1;
   bool corrected_ = false;
   double median_depth_ = 1.0;  // of the reference's points
+  double last_correlation_ = 0;
   // The last two frames' poses (world), for the motion prior.
   TimeNs t_f0_ = -1, t_f1_ = -1;
   SE3 T_w_f0_, T_w_f1_;

@@ -317,9 +317,11 @@ class Odometry::Impl {
     res_.mapping_ms = bt.mapping_ms;
     res_.ba_ms = bt.ba_ms;
     res_.window_points = bt.window_points;
-    for (const RetiredKeyframe& k : window.retiredKeyframes()) res_.keyframes.push_back({k.t, k.T_w_kf});
-    std::sort(res_.keyframes.begin(), res_.keyframes.end(),
+    res_.keyframe_maps = window.retiredKeyframes();
+    std::sort(res_.keyframe_maps.begin(), res_.keyframe_maps.end(),
               [](const auto& a, const auto& b) { return a.t < b.t; });
+    for (const RetiredKeyframe& k : res_.keyframe_maps) res_.keyframes.push_back({k.t, k.T_w_kf});
+    res_.pinhole = core_.undistorter().pinhole();
     res_.map = window.retiredPoints();
     res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, window.retiredKeyframes());
     res_.events_refined = refinedTrajectory(res_.events, res_.event_anchors, window.retiredKeyframes());

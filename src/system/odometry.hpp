@@ -153,6 +153,10 @@ struct OdometryResult {
   std::size_t event_frames = 0, events_tracked = 0;
   std::vector<double> event_track_ms;
   Trajectory keyframes;  // final (optimized) keyframe poses
+  // Every keyframe at its final pose with its image and points, in time order (the reference map that
+  // `eds track --reference` tracks against), on the undistorted grid of `pinhole`.
+  std::vector<RetiredKeyframe> keyframe_maps;
+  CameraModel pinhole;
   std::vector<MapPoint> map;
   std::size_t frames_in = 0, tracked = 0;
   std::size_t backend_waits = 0;  // times the tracking thread waited for the threaded back-end
@@ -241,7 +245,7 @@ std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, doubl
                                       double frame_rate);
 
 // trajectory_frames.txt (refined) and trajectory_frames_live.txt (as tracked), the same for events,
-// keyframes.txt, map.ply, summary.json.
+// keyframes.txt, map.ply, summary.json, and keyframes/ (system/reference_run.hpp).
 void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
                           const OdometryConfig& cfg);
 

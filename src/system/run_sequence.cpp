@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "io/merged_stream.hpp"
 #include "io/ply.hpp"
 #include "system/odometry.hpp"
+#include "system/reference_run.hpp"
 #include "system/run_stats.hpp"
 
 namespace eds {
@@ -36,56 +39,27 @@ std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, doubl
 
 namespace {
 
-// Pushes the selected frames and the events up to t_end into the odometry: each frame right after the
-// events up to its time stamp (the order the odometry processes them in, whatever the chunk size).
-class SequenceFeeder {
- public:
-  SequenceFeeder(const Sequence& seq, const std::vector<std::size_t>& idx, TimeNs t_end, Odometry& odo)
-      : seq_(seq), idx_(idx), t_end_(t_end), odo_(odo) {}
-
-  void run(bool use_events, const std::function<void(TimeNs)>& report) {
-    if (use_events) {
-      auto src = seq_.openEvents();
-      EventArray chunk;
-      bool done = false;
-      while (!done) {
-        chunk.clear();
-        if (src->read(chunk, 1 << 18) == 0) break;
-        std::size_t a = 0;
-        while (a < chunk.size()) {
-          // Events up to the next frame (or the end of the time range), then the frame.
-          const TimeNs stop = next_ < idx_.size() ? std::min(frameTime(next_), t_end_) : t_end_;
-          const auto last = std::upper_bound(chunk.t.begin() + a, chunk.t.end(), stop);
-          const auto b = static_cast<std::size_t>(last - chunk.t.begin());
-          odo_.addEvents(chunk, a, b);
-          a = b;
-          if (a == chunk.size()) break;
-          if (next_ < idx_.size() && frameTime(next_) <= t_end_) {
-            pushFrame(report);
-          } else {
-            done = true;
-            break;
-          }
-        }
-        if (!chunk.empty()) report(chunk.t[a == 0 ? 0 : a - 1]);
-      }
+// Pushes the selected frames and the events up to t_end into the odometry in time order: each frame
+// right after the events up to its time stamp.
+void feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, TimeNs t_end, bool use_events,
+                  Odometry& odo, const std::function<void(TimeNs)>& report) {
+  MergedStream stream(seq, 1 << 16, use_events);
+  EventArray chunk;
+  std::size_t frame = 0, next = 0;  // next: the next selected frame (index into idx)
+  for (auto kind = stream.next(chunk, frame); kind != MergedStream::Kind::kEnd; kind = stream.next(chunk, frame)) {
+    if (kind == MergedStream::Kind::kFrame) {
+      if (next == idx.size() || idx[next] != frame) continue;
+      ++next;
+      odo.addFrame(seq.frames()[frame].t, seq.loadFrame(frame));
+      report(seq.frames()[frame].t);
+    } else {
+      const auto end = std::upper_bound(chunk.t.begin(), chunk.t.end(), t_end) - chunk.t.begin();
+      odo.addEvents(chunk, 0, static_cast<std::size_t>(end));
+      if (!chunk.empty()) report(chunk.t.back());
+      if (static_cast<std::size_t>(end) < chunk.size() && next == idx.size()) break;  // past the range
     }
-    while (next_ < idx_.size()) pushFrame(report);
   }
-
- private:
-  TimeNs frameTime(std::size_t k) const { return seq_.frames()[idx_[k]].t; }
-  void pushFrame(const std::function<void(TimeNs)>& report) {
-    const TimeNs t = frameTime(next_);
-    odo_.addFrame(t, seq_.loadFrame(idx_[next_++]));
-    report(t);
-  }
-  const Sequence& seq_;
-  const std::vector<std::size_t>& idx_;
-  TimeNs t_end_;
-  Odometry& odo_;
-  std::size_t next_ = 0;
-};
+}
 
 }  // namespace
 
@@ -113,7 +87,7 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
     t_reported = t;
     progress(std::clamp(toSeconds(t - first_t), 0.0, total_s), total_s);
   };
-  SequenceFeeder(seq, idx, t_end, odo).run(cfg.use_events, report);
+  feedSequence(seq, idx, t_end, cfg.use_events, odo, report);
   if (progress) progress(total_s, total_s);
   return odo.finish();
 }
@@ -130,6 +104,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
     writeTum(dir / "trajectory_events_live.txt", r.events);
   }
   writeTum(dir / "keyframes.txt", r.keyframes);
+  writeReferenceKeyframes(dir, r.pinhole, r.keyframe_maps);
   PointCloud pc;
   for (const MapPoint& p : r.map) {
     pc.xyz.push_back(p.p_w.cast<float>());

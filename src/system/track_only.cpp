@@ -274,10 +274,10 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   return res;
 }
 
-void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,
-                       const TrackOnlyConfig& cfg) {
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r, const std::string& mode,
+                       const std::vector<std::pair<std::string, double>>& config) {
   nlohmann::json j;
-  j["mode"] = "track --depth-from-gt";
+  j["mode"] = mode;
   j["counts"] = {{"event_frames", r.event_frames},
                  {"tracked", r.tracked},
                  {"failures", r.failures.size()},
@@ -293,16 +293,22 @@ void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult&
   nlohmann::json fails = nlohmann::json::array();
   for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
   j["failures"] = fails;
-  j["config"] = {{"events_per_frame", cfg.event_frame.num_events},
-                 {"overlap", cfg.event_frame.overlap},
-                 {"tile", cfg.points.tile},
-                 {"point_fraction", cfg.points.fraction},
-                 {"max_points", cfg.points.max_points},
-                 {"depth_noise", cfg.depth_noise},
-                 {"seed", cfg.seed}};
+  for (const auto& [name, value] : config) j["config"][name] = value;
   std::ofstream out(file);
   if (!out) throw InputError(file.string(), "cannot open for writing");
   out << j.dump(2) << "\n";
+}
+
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,
+                       const TrackOnlyConfig& cfg) {
+  writeTrackSummary(file, r, "track --depth-from-gt",
+                    {{"events_per_frame", cfg.event_frame.num_events},
+                     {"overlap", cfg.event_frame.overlap},
+                     {"tile", cfg.points.tile},
+                     {"point_fraction", cfg.points.fraction},
+                     {"max_points", cfg.points.max_points},
+                     {"depth_noise", cfg.depth_noise},
+                     {"seed", static_cast<double>(cfg.seed)}});
 }
 
 }  // namespace eds

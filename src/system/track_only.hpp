@@ -6,6 +6,7 @@
 // keyframe), so errors accumulate as in the full system.
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "frontend/event_frame.hpp"
@@ -60,6 +61,7 @@ struct TrackOnlyResult {
   std::vector<TrackFailure> failures;
   std::vector<double> build_ms, track_ms;  // per event frame
   std::vector<double> frame_track_ms;      // per keyframe hand-over
+  std::vector<double> correlations;        // per tracked event frame: n̂·n after the solve
   std::vector<int> points_per_keyframe;
   double wall_s = 0;
   double sequence_s = 0;  // span of the event frames processed
@@ -67,7 +69,11 @@ struct TrackOnlyResult {
 
 TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg);
 
-// summary.json of a run (counts, timings with median/p95, failures, real-time factor).
+// summary.json of a run (counts, timings with median/p95, failures, real-time factor); `mode` names
+// the command, `config` the parameters worth recording as (name, value) pairs.
+void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r, const std::string& mode,
+                       const std::vector<std::pair<std::string, double>>& config);
+// The same for tracking-only with depth from the ground truth.
 void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,
                        const TrackOnlyConfig& cfg);
 

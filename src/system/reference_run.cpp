@@ -1,0 +1,107 @@
+#include "system/reference_run.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "core/error.hpp"
+#include "io/line_reader.hpp"
+#include "io/sequence.hpp"
+#include "io/text_parse.hpp"
+#include "io/trajectory_io.hpp"
+
+namespace eds {
+
+namespace {
+
+std::filesystem::path keyframeFile(const std::filesystem::path& dir, std::size_t i, const char* ext) {
+  char name[32];
+  std::snprintf(name, sizeof name, "kf_%06zu.%s", i, ext);
+  return dir / name;
+}
+
+std::vector<KeyframePoint> readPoints(const std::filesystem::path& file, int width, int height) {
+  LineReader reader(file);
+  std::vector<KeyframePoint> pts;
+  std::string_view line;
+  while (reader.next(line)) {
+    const char* p = text::skipSpaces(line.data(), line.data() + line.size());
+    const char* end = line.data() + line.size();
+    if (p == end || *p == '#') continue;
+    double v[3];
+    for (double& x : v) {
+      p = text::skipSpaces(p, end);
+      const auto r = std::from_chars(p, end, x);
+      if (r.ec != std::errc() || !text::atFieldEnd(r.ptr, end) || !std::isfinite(x))
+        throw InputError(file.string(), reader.lineNumber(),
+                         "expected 'u v inv_depth', got '" + std::string(line) + "'");
+      p = r.ptr;
+    }
+    if (v[0] < 0 || v[1] < 0 || v[0] > width - 1 || v[1] > height - 1 || !(v[2] > 0))
+      throw InputError(file.string(), reader.lineNumber(),
+                       "point outside the " + std::to_string(width) + "x" + std::to_string(height) +
+                           " image or without a positive inverse depth");
+    KeyframePoint kp;
+    kp.u = static_cast<float>(v[0]), kp.v = static_cast<float>(v[1]), kp.inv_depth = v[2];
+    pts.push_back(kp);
+  }
+  return pts;
+}
+
+}  // namespace
+
+void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel& pinhole,
+                             const std::vector<RetiredKeyframe>& keyframes) {
+  const std::filesystem::path kdir = dir / "keyframes";
+  std::filesystem::create_directories(kdir);
+  std::ofstream cam(kdir / "camera.txt");
+  if (!cam) throw InputError((kdir / "camera.txt").string(), "cannot open for writing");
+  cam.precision(17);
+  cam << pinhole.fx << " " << pinhole.fy << " " << pinhole.cx << " " << pinhole.cy << "\n";
+  Trajectory index;
+  for (std::size_t i = 0; i < keyframes.size(); ++i) {
+    const RetiredKeyframe& k = keyframes[i];
+    index.push_back({k.t, k.T_w_kf});
+    if (!cv::imwrite(keyframeFile(kdir, i, "png").string(), k.image))
+      throw InputError(keyframeFile(kdir, i, "png").string(), "cannot write the image");
+    std::ofstream pts(keyframeFile(kdir, i, "txt"));
+    if (!pts) throw InputError(keyframeFile(kdir, i, "txt").string(), "cannot open for writing");
+    pts << "# u v inv_depth (pixels of the undistorted image; inverse depth in map units)\n";
+    pts.precision(9);
+    for (const KeyframePoint& p : k.points) pts << p.u << " " << p.v << " " << p.inv_depth << "\n";
+  }
+  writeTum(kdir / "index.txt", index);
+}
+
+ReferenceRun readReferenceRun(const std::filesystem::path& dir) {
+  const std::filesystem::path kdir = dir / "keyframes";
+  if (!std::filesystem::is_directory(kdir))
+    throw InputError(kdir.string(), "no keyframes folder: give the output folder of `eds run`");
+  ReferenceRun run;
+  run.pinhole = readEcdCalib(kdir / "camera.txt");
+  if (run.pinhole.distortion != Distortion::kNone)
+    throw InputError((kdir / "camera.txt").string(), "expected a pinhole camera 'fx fy cx cy'");
+  const Trajectory index = readTum(kdir / "index.txt");
+  if (index.empty()) throw InputError((kdir / "index.txt").string(), "no keyframe");
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    const std::filesystem::path png = keyframeFile(kdir, i, "png");
+    const cv::Mat img8 = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
+    if (img8.empty()) throw InputError(png.string(), "missing or unreadable keyframe image");
+    if (i == 0) run.pinhole.width = img8.cols, run.pinhole.height = img8.rows;
+    if (img8.cols != run.pinhole.width || img8.rows != run.pinhole.height)
+      throw InputError(png.string(), "image size differs from the first keyframe's");
+    Keyframe kf;
+    kf.id = static_cast<int>(i);
+    kf.t = index[i].t;
+    kf.T_w_kf = index[i].T_w_c;
+    img8.convertTo(kf.image, CV_32F, 1.0 / 255.0);
+    kf.points = readPoints(keyframeFile(kdir, i, "txt"), img8.cols, img8.rows);
+    run.keyframes.push_back(std::move(kf));
+  }
+  return run;
+}
+
+}  // namespace eds

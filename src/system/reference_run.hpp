@@ -1,0 +1,29 @@
+#pragma once
+// A run's keyframes as a reference map for later tracking (`eds track --reference RUN_DIR`): every
+// keyframe the run made, at its final pose, with its undistorted image and the window's points seen
+// from it (inverse depths). Layout, under RUN_DIR/keyframes/:
+//   camera.txt          fx fy cx cy of the undistorted pinhole grid the images and points are on
+//   index.txt           one TUM line per keyframe (t, T_w_kf), in time order
+//   kf_NNNNNN.png       the keyframe's image (8-bit), NNNNNN = its row in index.txt
+//   kf_NNNNNN.txt       its points, `u v inv_depth` per line
+#include <filesystem>
+#include <vector>
+
+#include "backend/sliding_window.hpp"
+#include "core/camera.hpp"
+#include "map/keyframe.hpp"
+
+namespace eds {
+
+struct ReferenceRun {
+  CameraModel pinhole;              // with the images' size
+  std::vector<Keyframe> keyframes;  // image (CV_32F in [0, 1]), points (u, v, inv_depth), t, T_w_kf
+};
+
+// Writes the keyframes (sorted by time) under dir/keyframes/.
+void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel& pinhole,
+                             const std::vector<RetiredKeyframe>& keyframes);
+// Reads dir/keyframes/; InputError naming the file (and line) for anything missing or malformed.
+ReferenceRun readReferenceRun(const std::filesystem::path& dir);
+
+}  // namespace eds
