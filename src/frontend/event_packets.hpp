@@ -10,6 +10,15 @@
 
 namespace eds {
 
+// Removes the first n events of `events` (a moving window's consumed part).
+inline void eraseFront(EventArray& events, std::size_t n) {
+  const auto d = static_cast<std::ptrdiff_t>(n);
+  events.t.erase(events.t.begin(), events.t.begin() + d);
+  events.x.erase(events.x.begin(), events.x.begin() + d);
+  events.y.erase(events.y.begin(), events.y.begin() + d);
+  events.p.erase(events.p.begin(), events.p.begin() + d);
+}
+
 class EventPacketStream {
  public:
   // `lookahead`: events after each packet that must be read too, where the stream has them (the
@@ -35,13 +44,9 @@ class EventPacketStream {
   void compact() {
     // Drops everything before the next packet: the builder's per-pixel memory has already run past
     // it (up to the last packet's end and lookahead).
-    const auto d = static_cast<std::ptrdiff_t>(pos_);
-    buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
-    buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
-    buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
-    buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
-    pos_ -= static_cast<std::size_t>(d);
-    dropped_ += static_cast<std::uint64_t>(d);
+    eraseFront(buf_, pos_);
+    dropped_ += pos_;
+    pos_ = 0;
   }
   EventSource& src_;
   std::size_t n_, stride_, lookahead_, pos_ = 0;

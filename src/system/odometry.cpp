@@ -13,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
+#include "frontend/event_packets.hpp"
 #include "init/bootstrap.hpp"
 #include "system/event_frontend.hpp"
 #include "system/frame_frontend.hpp"
@@ -365,13 +366,9 @@ class Odometry::Impl {
 
   // Drops the events before the next packet: the builder's per-pixel memory has run past them.
   void compact() {
-    const auto d = static_cast<std::ptrdiff_t>(pos_);
-    buf_.t.erase(buf_.t.begin(), buf_.t.begin() + d);
-    buf_.x.erase(buf_.x.begin(), buf_.x.begin() + d);
-    buf_.y.erase(buf_.y.begin(), buf_.y.begin() + d);
-    buf_.p.erase(buf_.p.begin(), buf_.p.begin() + d);
+    eraseFront(buf_, pos_);
+    base_ += pos_;
     pos_ = 0;
-    base_ += static_cast<std::uint64_t>(d);
   }
 
   // Every packet whose events (and lookahead) have arrived; at the end, every complete packet.
