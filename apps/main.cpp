@@ -1,15 +1,29 @@
 // The `eds` program: a thin CLI11 front-end over the eds library.
 #include <exception>
 #include <iostream>
+#include <map>
+#include <string>
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"eds: Event-aided Direct Sparse Odometry"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "eds " + eds::versionString());
+  // Set while parsing, before any subcommand runs; accepted before or after the subcommand.
+  std::map<std::string, eds::LogLevel> levels;
+  for (const auto& [level, name] : eds::enumNames(eds::LogLevel{})) levels.emplace(name, level);
+  std::string level_name = "warn";
+  app.add_option("--log-level", level_name,
+                 "Messages on stderr: error, warn, info or debug (traces the bootstrap, every keyframe's solve "
+                 "and every event frame)")
+      ->check(CLI::IsMember(levels))
+      ->capture_default_str()
+      ->each([&levels](const std::string& name) { eds::setLogLevel(levels.at(name)); });
+  app.fallthrough();
   // Subcommands (one file each under apps/).
   eds::app::addInfoCommand(app);
   eds::app::addEvalCommand(app);

@@ -204,6 +204,77 @@ double PhotometricBA::cost(const std::vector<BaFrame>& frames, const std::vector
   return c;
 }
 
+// Adds the prior's gradient b + Hx at the current state and its Hessian blocks between free frames.
+void PhotometricBA::addPrior(const BaPrior& prior, const std::vector<BaFrame>& frames,
+                             const std::vector<int>& slot, NormalEquations& ne) const {
+  const Eigen::VectorXd g = prior.b + prior.H * prior.delta(frames);
+  const int npf = static_cast<int>(prior.frames.size());
+  for (int i = 0; i < npf; ++i) {
+    const int si = slot[prior.frames[i]];
+    if (si < 0) continue;
+    ne.bf.segment<8>(si * 8) += g.segment<8>(8 * i);
+    for (int j = 0; j < npf; ++j) {
+      const int sj = slot[prior.frames[j]];
+      if (sj >= 0) ne.Hff.block<8, 8>(si * 8, sj * 8) += prior.H.block<8, 8>(8 * i, 8 * j);
+    }
+  }
+}
+
+// One Levenberg-Marquardt step: damping on every diagonal entry, the Schur complement over the points,
+// the frames' step df and the points' new inverse depths. False if the step is not finite.
+bool PhotometricBA::dampedStep(const NormalEquations& ne, double lambda, int dim, const std::vector<double>& rho,
+                               StepScratch& w, Eigen::VectorXd& df, std::vector<double>& rho_new) const {
+  const std::size_t np = rho.size();
+  w.S = ne.Hff;
+  w.S.diagonal() *= 1.0 + lambda;
+  w.S.diagonal().array() += 1e-9;
+  w.s = ne.bf;
+  for (std::size_t i = 0; i < np; ++i) {
+    w.hpp_d[i] = ne.Hpp[i] * (1.0 + lambda) + 1e-12;
+    if (ne.Hpp[i] <= 0 || dim == 0) continue;
+    const auto col = ne.Hfp.col(static_cast<Eigen::Index>(i));
+    w.S.selfadjointView<Eigen::Lower>().rankUpdate(col, -1.0 / w.hpp_d[i]);
+    w.s.noalias() -= col * (ne.bp[i] / w.hpp_d[i]);
+  }
+  w.S.triangularView<Eigen::Upper>() = w.S.transpose();
+  df = dim > 0 ? Eigen::VectorXd(-w.S.ldlt().solve(w.s)) : Eigen::VectorXd();
+  if (!df.allFinite()) return false;
+  for (std::size_t i = 0; i < np; ++i) {
+    rho_new[i] = rho[i];
+    if (ne.Hpp[i] <= 0) continue;
+    const double dfp = dim > 0 ? ne.Hfp.col(static_cast<Eigen::Index>(i)).dot(df) : 0.0;
+    rho_new[i] = std::max(1e-4, rho[i] - (ne.bp[i] + dfp) / w.hpp_d[i]);
+  }
+  return true;
+}
+
+// Drops the observations whose pattern does not match any more (occlusion, wrong depth); a point left
+// without observations is an outlier. Returns how many observations were dropped.
+int PhotometricBA::removeOutliers(const std::vector<BaFrame>& frames, std::vector<BaPoint>& points) const {
+  const PairTransforms pairs(frames);
+  std::array<int, kReductionChunks> removed{};
+  forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
+    Eigen::Matrix<double, 8, 1> r;
+    for (std::size_t i = begin; i < end; ++i) {
+      BaPoint& p = points[i];
+      if (p.outlier) continue;
+      std::size_t keep = 0;
+      for (int t : p.targets) {
+        if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr) &&
+            std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
+          p.targets[keep++] = t;
+        else
+          ++removed[chunk];
+      }
+      p.targets.resize(keep);
+      if (p.targets.empty()) p.outlier = true;
+    }
+  });
+  int n = 0;
+  for (int k : removed) n += k;
+  return n;
+}
+
 BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoint>& points,
                                 const BaPrior* prior) const {
   BaStats stats;
@@ -227,43 +298,15 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
 
   double c = cost(frames, points, rho, gw, prior, &stats.initial_rmse, &stats.residuals);
   double lambda = cfg_.lambda_initial;
-  Eigen::MatrixXd S(dim, dim);
-  Eigen::VectorXd s(dim);
+  StepScratch scratch{Eigen::MatrixXd(dim, dim), Eigen::VectorXd(dim), std::vector<double>(np)};
+  Eigen::VectorXd df;
   NormalEquations ne;
-  std::vector<double> hpp_d(np);
   for (int it = 0; it < cfg_.iterations; ++it, ++stats.iterations) {
     accumulate(frames, points, rho, gw, slot, dim, ne, prior);
-    if (prior) {
-      // Gradient b + Hx at the current state; Hessian blocks between free frames only.
-      const Eigen::VectorXd g = prior->b + prior->H * prior->delta(frames);
-      const int npf = static_cast<int>(prior->frames.size());
-      for (int i = 0; i < npf; ++i) {
-        const int si = slot[prior->frames[i]];
-        if (si < 0) continue;
-        ne.bf.segment<8>(si * 8) += g.segment<8>(8 * i);
-        for (int j = 0; j < npf; ++j) {
-          const int sj = slot[prior->frames[j]];
-          if (sj >= 0) ne.Hff.block<8, 8>(si * 8, sj * 8) += prior->H.block<8, 8>(8 * i, 8 * j);
-        }
-      }
-    }
+    if (prior) addPrior(*prior, frames, slot, ne);
     bool accepted = false;
     for (int tries = 0; tries < 5 && !accepted; ++tries) {
-      // Levenberg damping on every diagonal entry, then the Schur complement over the points.
-      S = ne.Hff;
-      S.diagonal() *= 1.0 + lambda;
-      S.diagonal().array() += 1e-9;
-      s = ne.bf;
-      for (std::size_t i = 0; i < np; ++i) {
-        hpp_d[i] = ne.Hpp[i] * (1.0 + lambda) + 1e-12;
-        if (ne.Hpp[i] <= 0 || dim == 0) continue;
-        const auto col = ne.Hfp.col(static_cast<Eigen::Index>(i));
-        S.selfadjointView<Eigen::Lower>().rankUpdate(col, -1.0 / hpp_d[i]);
-        s.noalias() -= col * (ne.bp[i] / hpp_d[i]);
-      }
-      S.triangularView<Eigen::Upper>() = S.transpose();
-      const Eigen::VectorXd df = dim > 0 ? Eigen::VectorXd(-S.ldlt().solve(s)) : Eigen::VectorXd();
-      if (!df.allFinite()) {
+      if (!dampedStep(ne, lambda, dim, rho, scratch, df, rho_new)) {
         lambda *= 10;
         continue;
       }
@@ -274,12 +317,6 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         f_new[f].T_w_c = SE3::exp(x.head<6>()) * frames[f].T_w_c;
         f_new[f].a += x[6];
         f_new[f].b += x[7];
-      }
-      for (std::size_t i = 0; i < np; ++i) {
-        rho_new[i] = rho[i];
-        if (ne.Hpp[i] <= 0) continue;
-        const double dfp = dim > 0 ? ne.Hfp.col(static_cast<Eigen::Index>(i)).dot(df) : 0.0;
-        rho_new[i] = std::max(1e-4, rho[i] - (ne.bp[i] + dfp) / hpp_d[i]);
       }
       const double c_new = cost(f_new, points, rho_new, gw, prior, nullptr, nullptr);
       if (c_new < c) {
@@ -297,27 +334,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     if (!accepted) break;
   }
   for (std::size_t i = 0; i < np; ++i) points[i].inv_depth = rho[i];
-  // Outliers: observations whose pattern does not match any more (occlusion, wrong depth).
-  const PairTransforms pairs(frames);
-  std::array<int, kReductionChunks> removed{};
-  forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
-    Eigen::Matrix<double, 8, 1> r;
-    for (std::size_t i = begin; i < end; ++i) {
-      BaPoint& p = points[i];
-      if (p.outlier) continue;
-      std::size_t keep = 0;
-      for (int t : p.targets) {
-        if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr) &&
-            std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
-          p.targets[keep++] = t;
-        else
-          ++removed[chunk];
-      }
-      p.targets.resize(keep);
-      if (p.targets.empty()) p.outlier = true;
-    }
-  });
-  for (int k : removed) stats.outliers_removed += k;
+  stats.outliers_removed = removeOutliers(frames, points);
   cost(frames, points, rho, gw, nullptr, &stats.final_rmse, &stats.residuals);
   return stats;
 }

@@ -33,14 +33,7 @@ struct BaConfig {
   double lambda_initial = 1e-4;
 };
 
-template <class V>
-void visitFields(V&& v, BaConfig& c) {
-  v("iterations", c.iterations);
-  v("huber", c.huber);
-  v("grad_weight_c", c.grad_weight_c);
-  v("outlier_energy", c.outlier_energy);
-  v("lambda_initial", c.lambda_initial);
-}
+EDS_FIELDS(BaConfig, iterations, huber, grad_weight_c, outlier_energy, lambda_initial)
 
 struct BaFrame {
   SE3 T_w_c;
@@ -132,6 +125,17 @@ class PhotometricBA {
                   const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                   const std::vector<int>& slot, int dim, NormalEquations& ne, const BaPrior* prior,
                   int only_host = -1) const;
+
+  struct StepScratch {  // reused across the damped steps of one optimize()
+    Eigen::MatrixXd S;
+    Eigen::VectorXd s;
+    std::vector<double> hpp_d;
+  };
+  void addPrior(const BaPrior& prior, const std::vector<BaFrame>& frames, const std::vector<int>& slot,
+                NormalEquations& ne) const;
+  bool dampedStep(const NormalEquations& ne, double lambda, int dim, const std::vector<double>& rho,
+                  StepScratch& w, Eigen::VectorXd& df, std::vector<double>& rho_new) const;
+  int removeOutliers(const std::vector<BaFrame>& frames, std::vector<BaPoint>& points) const;
 
   CameraModel cam_;
   BaConfig cfg_;

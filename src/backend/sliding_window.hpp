@@ -48,16 +48,7 @@ struct BackendConfig {
   void validate() const;
 };
 
-template <class V>
-void visitFields(V&& v, BackendConfig& c) {
-  v("window", c.window);
-  v("points_per_keyframe", c.points_per_keyframe);
-  v("marginalize", c.marginalize);
-  v("removal", c.removal);
-  v("min_visible", c.min_visible);
-  v("reference_inliers_only", c.reference_inliers_only);
-  v("ba", c.ba);
-}
+EDS_FIELDS(BackendConfig, window, points_per_keyframe, marginalize, removal, min_visible, reference_inliers_only, ba)
 
 struct MapPoint {
   Vec3 p_w;

@@ -145,6 +145,195 @@ double lensBorderDifferencePx(const CameraModel& a, const CameraModel& b) {
   return worst;
 }
 
+namespace {
+
+// The bundle adjustment of refineLens: poses, points and the lens, stored where Ceres can point at
+// them for the whole solve.
+class LensProblem {
+ public:
+  LensProblem(const CameraModel& camera, const std::vector<std::optional<SE3>>& T_w_c, const LensRefineConfig& cfg,
+              int first, int last)
+      : camera_(camera), T_w_c_(T_w_c), cfg_(cfg), first_(first), last_(last), pose_(T_w_c.size()) {
+    baseline_ = (T_w_c[last]->translation() - T_w_c[first]->translation()).norm();
+    CameraModel start = camera;
+    if (camera.distortion != Distortion::kRadTan) start.k = {};  // undistorted: radtan with zeros
+    for (int i = 0; i < 9; ++i) lens_[static_cast<std::size_t>(i)] = lensParameter(start, i);
+    for (std::size_t i = 0; i < T_w_c.size(); ++i) {
+      if (!T_w_c[i]) continue;
+      const SE3 T_c_w = T_w_c[i]->inverse();
+      const Quat& q = T_c_w.quaternion();
+      pose_[i] = {q.x(), q.y(), q.z(), q.w(), T_c_w.translation().x(), T_c_w.translation().y(),
+                  T_c_w.translation().z()};
+    }
+  }
+
+  // Triangulates each track from its posed observations with the given lens; returns how many made it.
+  std::size_t triangulate(const std::vector<FeatureTrack>& tracks) {
+    const double min_cos = std::cos(cfg_.min_parallax_deg * M_PI / 180.0);
+    std::vector<Vec3> origins, dirs;
+    for (const FeatureTrack& tr : tracks) {
+      origins.clear();
+      dirs.clear();
+      std::vector<Observation> mine;
+      for (std::size_t j = 0; j < tr.frames.size(); ++j) {
+        const int f = tr.frames[j];
+        if (f < 0 || f >= static_cast<int>(T_w_c_.size()) || !T_w_c_[f]) continue;
+        const SE3& T = *T_w_c_[f];
+        origins.push_back(T.translation());
+        dirs.push_back((T.so3() * camera_.unproject(tr.px[j])).normalized());
+        mine.push_back({f, static_cast<int>(points_.size()), tr.px[j]});
+      }
+      if (static_cast<int>(mine.size()) < cfg_.min_observations) continue;
+      if (dirs.front().dot(dirs.back()) > min_cos) continue;  // too little parallax for a depth
+      const Vec3 X = intersectRays(origins, dirs);
+      bool in_front = X.allFinite();
+      for (const Observation& o : mine) in_front = in_front && (T_w_c_[o.frame]->inverse() * X).z() > 0;
+      if (!in_front) continue;
+      points_.push_back(X);
+      obs_.insert(obs_.end(), mine.begin(), mine.end());
+    }
+    return points_.size();
+  }
+
+  double residual(const Observation& o) const {
+    const ReprojectionCost cost(o.px);
+    double r[2];
+    if (!cost(pose_[o.frame].data(), points_[o.point].data(), lens_.data(), r)) return 1e9;
+    return std::hypot(r[0], r[1]);
+  }
+
+  double rms() const {
+    double s = 0;
+    std::size_t n = 0;
+    for (const Observation& o : obs_) {
+      if (!o.inlier) continue;
+      const double e = residual(o);
+      s += e * e;
+      ++n;
+    }
+    return n ? std::sqrt(s / n) : 0.0;
+  }
+
+  // Drops the observations the lens cannot explain, and the tracks left too short.
+  void rejectOutliers(LensRefineResult& res) {
+    for (Observation& o : obs_) o.inlier = residual(o) <= cfg_.outlier_px;
+    std::vector<int> count(points_.size(), 0);
+    for (const Observation& o : obs_) count[o.point] += o.inlier;
+    for (Observation& o : obs_) o.inlier = o.inlier && count[o.point] >= cfg_.min_observations;
+    for (int c : count) res.tracks_used += c >= cfg_.min_observations;
+  }
+
+  // group >= 0: only the tracks of that group (point index modulo cfg.split_groups), no covariance.
+  bool solve(bool lens_free, int group);
+
+  CameraModel lensCamera() const {
+    CameraModel c = camera_;
+    c.distortion = Distortion::kRadTan;
+    for (int i = 0; i < 9; ++i) lensParameter(c, i) = lens_[static_cast<std::size_t>(i)];
+    return c;
+  }
+
+  // Repeatability: the lens from each of the disjoint groups of tracks, from the full solution, against
+  // `full`. Errors along a track are correlated (each position is tracked from the last), which the
+  // covariance (independent errors) does not see; whole tracks per group, this spread does.
+  double splitSigmaPx(const CameraModel& full) {
+    const auto pose0 = pose_;
+    const auto points0 = points_;
+    const auto lens0 = lens_;
+    double sum2 = 0;
+    for (int g = 0; g < cfg_.split_groups; ++g) {
+      solve(true, g);
+      const double d = lensBorderDifferencePx(full, lensCamera());
+      sum2 += d * d;
+      pose_ = pose0, points_ = points0, lens_ = lens0;
+    }
+    // Each group holds 1/K of the tracks: the full set's spread is the groups' over sqrt(K).
+    const double K = cfg_.split_groups;
+    return std::sqrt(sum2 / (K * (K - 1)));
+  }
+
+  std::vector<std::optional<SE3>> poses() const {
+    std::vector<std::optional<SE3>> out(T_w_c_.size());
+    for (std::size_t i = 0; i < T_w_c_.size(); ++i) {
+      if (!T_w_c_[i]) continue;
+      const Quat q(pose_[i][3], pose_[i][0], pose_[i][1], pose_[i][2]);
+      out[i] = SE3(q.normalized(), Vec3(pose_[i][4], pose_[i][5], pose_[i][6])).inverse();
+    }
+    return out;
+  }
+
+  std::size_t observations() const {
+    std::size_t n = 0;
+    for (const Observation& o : obs_) n += o.inlier;
+    return n;
+  }
+
+  // The covariance of the lens after the full solve (zero where held); ok false if there is none.
+  Eigen::Matrix<double, 9, 9> lens_cov = Eigen::Matrix<double, 9, 9>::Zero();
+  bool cov_ok = false;
+
+ private:
+  const CameraModel& camera_;
+  const std::vector<std::optional<SE3>>& T_w_c_;
+  const LensRefineConfig& cfg_;
+  int first_, last_;
+  double baseline_ = 0;
+  LensBlock lens_{};
+  std::vector<PoseBlock> pose_;
+  std::vector<Vec3> points_;
+  std::vector<Observation> obs_;
+};
+
+bool LensProblem::solve(bool lens_free, int group) {
+  ceres::Solver::Options opts;
+  // A few hundred frames at most: the reduced camera system is small enough to be dense; the sparse
+  // and the iterative Schur solvers were slower here (the lens block couples every frame).
+  opts.linear_solver_type = ceres::DENSE_SCHUR;
+  opts.max_num_iterations = cfg_.max_iterations;
+  opts.num_threads = 2;
+  opts.logging_type = ceres::SILENT;
+  ceres::Problem::Options popts;
+  popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(popts);
+  ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>> pose_manifold;
+  ceres::HuberLoss huber(cfg_.huber_px);
+  std::vector<int> used(T_w_c_.size(), 0);
+  for (const Observation& o : obs_) {
+    if (!o.inlier || (group >= 0 && o.point % cfg_.split_groups != group)) continue;
+    auto* cost = new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 7, 3, 9>(new ReprojectionCost(o.px));
+    problem.AddResidualBlock(cost, &huber, pose_[o.frame].data(), points_[o.point].data(), lens_.data());
+    if (!used[o.frame]) problem.SetManifold(pose_[o.frame].data(), &pose_manifold);
+    used[o.frame] = 1;
+  }
+  if (used[first_]) problem.SetParameterBlockConstant(pose_[first_].data());
+  if (used[last_]) {
+    const Vec3 c0 = T_w_c_[first_]->translation();
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BaselineCost, 1, 7>(new BaselineCost(c0, baseline_)),
+                             nullptr, pose_[last_].data());
+  }
+  // Which lens parameters (LensBlock order) move; the others are held as they are.
+  const std::array<bool, 9> moves{cfg_.refine_radial,     cfg_.refine_radial,     cfg_.refine_tangential,
+                                  cfg_.refine_tangential, cfg_.refine_k3,         cfg_.refine_projection,
+                                  cfg_.refine_projection, cfg_.refine_projection, cfg_.refine_projection};
+  std::vector<int> held;
+  for (int i = 0; i < 9; ++i)
+    if (!lens_free || !moves[static_cast<std::size_t>(i)]) held.push_back(i);
+  std::unique_ptr<ceres::SubsetManifold> subset;
+  if (held.size() == lens_.size()) {
+    problem.SetParameterBlockConstant(lens_.data());
+  } else if (!held.empty()) {
+    subset = std::make_unique<ceres::SubsetManifold>(static_cast<int>(lens_.size()), held);
+    problem.SetManifold(lens_.data(), subset.get());
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(opts, &problem, &summary);
+  if (lens_free && group < 0) cov_ok = lensCovariance(problem, lens_.data(), &lens_cov);
+  return summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
+}
+
+}  // namespace
+
 LensRefineResult refineLens(const CameraModel& camera, const std::vector<FeatureTrack>& tracks,
                             const std::vector<std::optional<SE3>>& T_w_c, const LensRefineConfig& cfg) {
   cfg.validate();
@@ -159,188 +348,39 @@ LensRefineResult refineLens(const CameraModel& camera, const std::vector<Feature
   }
   if (first < 0 || first == last)
     throw std::invalid_argument("lens refinement: needs at least two posed frames");
-  const double baseline = (T_w_c[last]->translation() - T_w_c[first]->translation()).norm();
-  if (!(baseline > 0)) throw std::invalid_argument("lens refinement: the first and last poses coincide");
-
-  // Parameters, stored where Ceres can point at them for the whole solve.
-  CameraModel start = camera;
-  if (camera.distortion != Distortion::kRadTan) start.k = {};  // undistorted: radtan with zeros
-  LensBlock lens;
-  for (int i = 0; i < 9; ++i) lens[static_cast<std::size_t>(i)] = lensParameter(start, i);
-  std::vector<PoseBlock> pose(T_w_c.size());
-  for (std::size_t i = 0; i < T_w_c.size(); ++i) {
-    if (!T_w_c[i]) continue;
-    const SE3 T_c_w = T_w_c[i]->inverse();
-    const Quat& q = T_c_w.quaternion();
-    pose[i] = {q.x(),
-               q.y(),
-               q.z(),
-               q.w(),
-               T_c_w.translation().x(),
-               T_c_w.translation().y(),
-               T_c_w.translation().z()};
-  }
-
-  // Triangulate each track from its posed observations with the given lens.
-  std::vector<Vec3> points;
-  std::vector<Observation> obs;
-  const double min_cos = std::cos(cfg.min_parallax_deg * M_PI / 180.0);
-  std::vector<Vec3> origins, dirs;
-  for (const FeatureTrack& tr : tracks) {
-    origins.clear();
-    dirs.clear();
-    std::vector<Observation> mine;
-    for (std::size_t j = 0; j < tr.frames.size(); ++j) {
-      const int f = tr.frames[j];
-      if (f < 0 || f >= static_cast<int>(T_w_c.size()) || !T_w_c[f]) continue;
-      const SE3& T = *T_w_c[f];
-      origins.push_back(T.translation());
-      dirs.push_back((T.so3() * camera.unproject(tr.px[j])).normalized());
-      mine.push_back({f, static_cast<int>(points.size()), tr.px[j]});
-    }
-    if (static_cast<int>(mine.size()) < cfg.min_observations) continue;
-    if (dirs.front().dot(dirs.back()) > min_cos) continue;  // too little parallax for a depth
-    const Vec3 X = intersectRays(origins, dirs);
-    bool in_front = X.allFinite();
-    for (const Observation& o : mine) in_front = in_front && (T_w_c[o.frame]->inverse() * X).z() > 0;
-    if (!in_front) continue;
-    points.push_back(X);
-    obs.insert(obs.end(), mine.begin(), mine.end());
-  }
+  if (!((T_w_c[last]->translation() - T_w_c[first]->translation()).norm() > 0))
+    throw std::invalid_argument("lens refinement: the first and last poses coincide");
+  LensProblem lp(camera, T_w_c, cfg, first, last);
   constexpr std::size_t kMinTracks = 20;
-  if (points.size() < kMinTracks)
-    throw std::invalid_argument("lens refinement: only " + std::to_string(points.size()) +
-                                " tracks are long enough with enough parallax (need " +
-                                std::to_string(kMinTracks) + ")");
-
-  auto residual = [&](const Observation& o) {
-    const ReprojectionCost cost(o.px);
-    double r[2];
-    if (!cost(pose[o.frame].data(), points[o.point].data(), lens.data(), r)) return 1e9;
-    return std::hypot(r[0], r[1]);
-  };
-  auto rms = [&]() {
-    double s = 0;
-    std::size_t n = 0;
-    for (const Observation& o : obs) {
-      if (!o.inlier) continue;
-      const double e = residual(o);
-      s += e * e;
-      ++n;
-    }
-    return n ? std::sqrt(s / n) : 0.0;
-  };
-
-  ceres::Solver::Options opts;
-  // A few hundred frames at most: the reduced camera system is small enough to be dense; the sparse
-  // and the iterative Schur solvers were slower here (the lens block couples every frame).
-  opts.linear_solver_type = ceres::DENSE_SCHUR;
-  opts.max_num_iterations = cfg.max_iterations;
-  opts.num_threads = 2;
-  opts.logging_type = ceres::SILENT;
-
-  // The covariance of the lens after the full solve (zero where held); cov_ok false if there is none.
-  Eigen::Matrix<double, 9, 9> lens_cov = Eigen::Matrix<double, 9, 9>::Zero();
-  bool cov_ok = false;
-  // group >= 0: only the tracks of that group (point index modulo cfg.split_groups), no covariance.
-  auto solve = [&](bool lens_free, int group) {
-    ceres::Problem::Options popts;
-    popts.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    popts.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    ceres::Problem problem(popts);
-    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>> pose_manifold;
-    ceres::HuberLoss huber(cfg.huber_px);
-    std::vector<int> used(T_w_c.size(), 0);
-    for (const Observation& o : obs) {
-      if (!o.inlier || (group >= 0 && o.point % cfg.split_groups != group)) continue;
-      auto* cost = new ceres::AutoDiffCostFunction<ReprojectionCost, 2, 7, 3, 9>(new ReprojectionCost(o.px));
-      problem.AddResidualBlock(cost, &huber, pose[o.frame].data(), points[o.point].data(), lens.data());
-      if (!used[o.frame]) problem.SetManifold(pose[o.frame].data(), &pose_manifold);
-      used[o.frame] = 1;
-    }
-    if (used[first]) problem.SetParameterBlockConstant(pose[first].data());
-    if (used[last]) {
-      const Vec3 c0 = T_w_c[first]->translation();
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<BaselineCost, 1, 7>(new BaselineCost(c0, baseline)), nullptr,
-          pose[last].data());
-    }
-    // Which lens parameters (LensBlock order) move; the others are held as they are.
-    const std::array<bool, 9> moves{cfg.refine_radial,     cfg.refine_radial,     cfg.refine_tangential,
-                                    cfg.refine_tangential, cfg.refine_k3,         cfg.refine_projection,
-                                    cfg.refine_projection, cfg.refine_projection, cfg.refine_projection};
-    std::vector<int> held;
-    for (int i = 0; i < 9; ++i)
-      if (!lens_free || !moves[static_cast<std::size_t>(i)]) held.push_back(i);
-    std::unique_ptr<ceres::SubsetManifold> subset;
-    if (held.size() == lens.size()) {
-      problem.SetParameterBlockConstant(lens.data());
-    } else if (!held.empty()) {
-      subset = std::make_unique<ceres::SubsetManifold>(static_cast<int>(lens.size()), held);
-      problem.SetManifold(lens.data(), subset.get());
-    }
-    ceres::Solver::Summary summary;
-    ceres::Solve(opts, &problem, &summary);
-    if (lens_free && group < 0) cov_ok = lensCovariance(problem, lens.data(), &lens_cov);
-    return summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
-  };
-
-  // 1. Poses and points with the given lens; drop what it cannot explain.
-  solve(false, -1);
-  for (Observation& o : obs) o.inlier = residual(o) <= cfg.outlier_px;
-  std::vector<int> count(points.size(), 0);
-  for (const Observation& o : obs) count[o.point] += o.inlier;
-  for (Observation& o : obs) o.inlier = o.inlier && count[o.point] >= cfg.min_observations;
-  solve(false, -1);  // again without the outliers: the fair baseline for the refined lens
+  if (const std::size_t n = lp.triangulate(tracks); n < kMinTracks)
+    throw std::invalid_argument("lens refinement: only " + std::to_string(n) +
+                                " tracks are long enough with enough parallax (need " + std::to_string(kMinTracks) +
+                                ")");
   LensRefineResult res;
-  res.rms_fixed_px = rms();
+  // 1. Poses and points with the given lens; drop what it cannot explain, and solve again without the
+  // outliers: the fair baseline for the refined lens.
+  lp.solve(false, -1);
+  lp.rejectOutliers(res);
+  lp.solve(false, -1);
+  res.rms_fixed_px = lp.rms();
   // 2. Everything, lens included.
-  res.converged = solve(true, -1);
-  res.rms_refined_px = rms();
-  for (const Observation& o : obs) res.observations += o.inlier;
-  for (int c : count) res.tracks_used += c >= cfg.min_observations;
-
-  auto lensCamera = [&] {
-    CameraModel c = camera;
-    c.distortion = Distortion::kRadTan;
-    for (int i = 0; i < 9; ++i) lensParameter(c, i) = lens[static_cast<std::size_t>(i)];
-    return c;
-  };
-  res.camera = lensCamera();
-  if (cov_ok) {
+  res.converged = lp.solve(true, -1);
+  res.rms_refined_px = lp.rms();
+  res.observations = lp.observations();
+  res.camera = lp.lensCamera();
+  if (lp.cov_ok) {
     // Scale to the residuals' variance: the covariance above assumes 1 px.
-    res.lens_sigma_cov_px = borderSigmaPx(res.camera, lens_cov * res.rms_refined_px * res.rms_refined_px);
+    const double r2 = res.rms_refined_px * res.rms_refined_px;
+    res.lens_sigma_cov_px = borderSigmaPx(res.camera, lp.lens_cov * r2);
     res.lens_sigma_px = res.lens_sigma_cov_px;
-    for (int i = 0; i < 5; ++i)
-      res.k_sigma[i] = std::sqrt(std::max(0.0, lens_cov(i, i))) * res.rms_refined_px;
+    for (int i = 0; i < 5; ++i) res.k_sigma[i] = std::sqrt(std::max(0.0, lp.lens_cov(i, i))) * res.rms_refined_px;
   }
   if (cfg.split_groups > 1) {
-    // Repeatability: the lens from each of the disjoint groups of tracks, from the full solution. Errors
-    // along a track are correlated (each position is tracked from the last), which the covariance
-    // (independent errors) does not see; whole tracks per group, this spread does.
-    const auto pose0 = pose;
-    const auto points0 = points;
-    const auto lens0 = lens;
-    double sum2 = 0;
-    for (int g = 0; g < cfg.split_groups; ++g) {
-      solve(true, g);
-      const double d = lensBorderDifferencePx(res.camera, lensCamera());
-      sum2 += d * d;
-      pose = pose0, points = points0, lens = lens0;
-    }
-    // Each group holds 1/K of the tracks: the full set's spread is the groups' over sqrt(K).
-    const double K = cfg.split_groups;
-    res.lens_sigma_split_px = std::sqrt(sum2 / (K * (K - 1)));
-    res.lens_sigma_px = std::isfinite(res.lens_sigma_cov_px)
-                            ? std::max(res.lens_sigma_cov_px, res.lens_sigma_split_px)
-                            : res.lens_sigma_split_px;
+    res.lens_sigma_split_px = lp.splitSigmaPx(res.camera);
+    res.lens_sigma_px = std::isfinite(res.lens_sigma_cov_px) ? std::max(res.lens_sigma_cov_px, res.lens_sigma_split_px)
+                                                             : res.lens_sigma_split_px;
   }
-  res.T_w_c.resize(T_w_c.size());
-  for (std::size_t i = 0; i < T_w_c.size(); ++i) {
-    if (!T_w_c[i]) continue;
-    const Quat q(pose[i][3], pose[i][0], pose[i][1], pose[i][2]);
-    res.T_w_c[i] = SE3(q.normalized(), Vec3(pose[i][4], pose[i][5], pose[i][6])).inverse();
-  }
+  res.T_w_c = lp.poses();
   return res;
 }
 

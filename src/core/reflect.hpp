@@ -1,7 +1,7 @@
 #pragma once
-// Configuration structs list their fields once, next to their declaration, in a `visitFields(v, cfg)`
-// overload that calls v("name", cfg.field) for every field (nested configuration structs included,
-// which have their own overload). Everything that walks a configuration (YAML loading,
+// Configuration structs list their fields once, next to their declaration, with
+// EDS_FIELDS(Struct, field, ...), which defines a `visitFields(v, cfg)` overload calling
+// v("field", cfg.field) for every field (nested configuration structs included, which have their own). Everything that walks a configuration (YAML loading,
 // config_used.yaml, command-line overrides, tests) goes through these lists. `fieldCount<T>()` counts
 // an aggregate's members, so that a test can tell a field that was added but not listed.
 #include <array>
@@ -41,3 +41,20 @@ constexpr std::string_view enumName(E value) {
 }
 
 }  // namespace eds
+
+// EDS_FIELDS(Struct, a, b, ...) defines visitFields for Struct over its fields a, b, ... (at most 64).
+#define EDS_FIELDS(Struct, ...)                    \
+  template <class V>                               \
+  void visitFields(V&& v, Struct& c) {             \
+    EDS_FOR_EACH(EDS_VISIT_ONE_FIELD, __VA_ARGS__) \
+  }
+#define EDS_VISIT_ONE_FIELD(field) v(#field, c.field);
+// A preprocessor loop: EDS_FOR_EACH(m, a, b, c) expands to m(a) m(b) m(c).
+#define EDS_PARENS ()
+#define EDS_EXPAND(...) EDS_EXPAND3(EDS_EXPAND3(EDS_EXPAND3(EDS_EXPAND3(__VA_ARGS__))))
+#define EDS_EXPAND3(...) EDS_EXPAND2(EDS_EXPAND2(EDS_EXPAND2(EDS_EXPAND2(__VA_ARGS__))))
+#define EDS_EXPAND2(...) EDS_EXPAND1(EDS_EXPAND1(EDS_EXPAND1(EDS_EXPAND1(__VA_ARGS__))))
+#define EDS_EXPAND1(...) __VA_ARGS__
+#define EDS_FOR_EACH(macro, ...) __VA_OPT__(EDS_EXPAND(EDS_FOR_EACH_STEP(macro, __VA_ARGS__)))
+#define EDS_FOR_EACH_STEP(macro, a, ...) macro(a) __VA_OPT__(EDS_FOR_EACH_AGAIN EDS_PARENS(macro, __VA_ARGS__))
+#define EDS_FOR_EACH_AGAIN() EDS_FOR_EACH_STEP

@@ -45,15 +45,7 @@ struct EventFrameConfig {
   std::size_t lookahead() const;  // events after a packet that its build reads (0: compensation off)
 };
 
-template <class V>
-void visitFields(V&& v, EventFrameConfig& c) {
-  v("num_events", c.num_events);
-  v("overlap", c.overlap);
-  v("sigma_frac", c.sigma_frac);
-  v("blur", c.blur);
-  v("reversal_compensation", c.reversal_compensation);
-  v("compensation_lookahead", c.compensation_lookahead);
-}
+EDS_FIELDS(EventFrameConfig, num_events, overlap, sigma_frac, blur, reversal_compensation, compensation_lookahead)
 
 struct EventFrame {
   TimeNs t = 0;  // the median event's time

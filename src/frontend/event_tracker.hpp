@@ -37,18 +37,7 @@ struct EventTrackerConfig {
   void validate() const;
 };
 
-template <class V>
-void visitFields(V&& v, EventTrackerConfig& c) {
-  v("max_iterations", c.max_iterations);
-  v("levels", c.levels);
-  v("huber_initial", c.huber_initial);
-  v("adapt_huber", c.adapt_huber);
-  v("border", c.border);
-  v("set_margin", c.set_margin);
-  v("min_points", c.min_points);
-  v("min_correlation", c.min_correlation);
-  v("lambda_initial", c.lambda_initial);
-}
+EDS_FIELDS(EventTrackerConfig, max_iterations, levels, huber_initial, adapt_huber, border, set_margin, min_points, min_correlation, lambda_initial)
 
 // A Gaussian prior on the pose (a motion model's prediction). Its error is the left twist
 // e = log(T_ef_kf · T_prior⁻¹) = (translation, rotation), with standard deviations `sigma` in metres and

@@ -23,16 +23,7 @@ struct FrameTrackerConfig {
   double convergence = 1e-8;  // a level ends when the cost falls by less than this fraction
 };
 
-template <class V>
-void visitFields(V&& v, FrameTrackerConfig& c) {
-  v("levels", c.levels);
-  v("max_iterations", c.max_iterations);
-  v("huber", c.huber);
-  v("affine", c.affine);
-  v("max_rmse", c.max_rmse);
-  v("min_residuals", c.min_residuals);
-  v("convergence", c.convergence);
-}
+EDS_FIELDS(FrameTrackerConfig, levels, max_iterations, huber, affine, max_rmse, min_residuals, convergence)
 
 struct FrameTrackResult {
   bool ok = false;

@@ -17,14 +17,7 @@ struct PointSelectionConfig {
   void validate() const;       // throws std::invalid_argument
 };
 
-template <class V>
-void visitFields(V&& v, PointSelectionConfig& c) {
-  v("tile", c.tile);
-  v("fraction", c.fraction);
-  v("min_gradient", c.min_gradient);
-  v("border", c.border);
-  v("max_points", c.max_points);
-}
+EDS_FIELDS(PointSelectionConfig, tile, fraction, min_gradient, border, max_points)
 
 // Returns selected pixel coordinates (x, y), sorted by row then column.
 std::vector<cv::Point> selectPoints(const cv::Mat& grad_x, const cv::Mat& grad_y,

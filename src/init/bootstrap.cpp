@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "core/log.hpp"
+
 namespace eds {
 
 void BootstrapConfig::validate() const {
@@ -70,36 +72,34 @@ double Bootstrap::translationParallax(const SE3& T_c_ref) const {
   return n ? std::sqrt(ss / n) : 0.0;
 }
 
-bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
-  if (done_) throw std::logic_error("Bootstrap::add after initialization");
-  last_image_ = image;
-  if (!has_ref_) {
-    setReference(t, image);
-    return false;
-  }
-  if (geo_state_ != GeoState::kUnavailable) {
-    // The planar verdict holds for this frame only: a homography also explains a rotation-dominated
-    // motion of a scene with depth (a hand-held camera shaking before it translates), and a verdict
-    // taken then would let the constant-depth photometric path succeed on a 3D scene.
-    geo_state_ = GeoState::kPending;
-    const std::optional<GeometricInitResult> g = geo_.add(image);
-    if (g && g->planar) geo_state_ = GeoState::kPlanar;
-    if (g && std::getenv("EDS_DEBUG"))
-      std::fprintf(stderr, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg\n",
-                   frames_.size(), g->planar, g->inliers, g->parallax_deg);
-    if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
-    if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
-  }
-  if (photometric_failed_) return keepForGeometry(t, image);
-  // Constant-velocity prediction in the reference frame.
-  SE3 T_c_ref = frames_.back().T_ref_c.inverse();
+// The geometric path on this frame; true when it initialized.
+bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image) {
+  if (geo_state_ == GeoState::kUnavailable) return false;
+  // The planar verdict holds for this frame only: a homography also explains a rotation-dominated
+  // motion of a scene with depth (a hand-held camera shaking before it translates), and a verdict
+  // taken then would let the constant-depth photometric path succeed on a 3D scene.
+  geo_state_ = GeoState::kPending;
+  const std::optional<GeometricInitResult> g = geo_.add(image);
+  if (g && g->planar) geo_state_ = GeoState::kPlanar;
+  if (g && logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg",
+                 frames_.size(), g->planar, g->inliers, g->parallax_deg);
+  if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
+  if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
+  return false;
+}
+
+// The frame aligned to the reference at constant depth, from the constant-velocity prediction and the
+// events' hint (the better of the two), else from the last pose. False if every start failed.
+bool Bootstrap::alignToReference(const cv::Mat& image, const SE3* hint, SE3& T_c_ref, double& alpha,
+                                 double& beta) const {
+  T_c_ref = frames_.back().T_ref_c.inverse();
   if (frames_.size() >= 2) {
     const SE3 T_last = frames_.back().T_ref_c.inverse(),
               T_prev = frames_[frames_.size() - 2].T_ref_c.inverse();
     T_c_ref = (T_last * T_prev.inverse()) * T_last;
   }
-  double alpha = std::exp(frames_.back().a), beta = frames_.back().b;
-
+  alpha = std::exp(frames_.back().a), beta = frames_.back().b;
   FrameTracker tracker(cam_, cfg_.tracker);
   tracker.setKeyframe(ref_);
   FrameTrackResult tr = tracker.track(image, T_c_ref, alpha, beta);
@@ -109,31 +109,32 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     const FrameTrackResult tr_h = tracker.track(image, T_h, a_h, b_h);
     if (tr_h.ok && a_h > 0 && (!tr.ok || !(alpha > 0) || tr_h.rmse < tr.rmse)) {
       T_c_ref = T_h, alpha = a_h, beta = b_h, tr = tr_h;
-      if (std::getenv("EDS_DEBUG"))
-        std::fprintf(stderr, "bootstrap: the events' pose seeds frame %zu\n", frames_.size());
+      if (logEnabled(LogLevel::kDebug))
+        logf(LogLevel::kDebug, "bootstrap: the events' pose seeds frame %zu", frames_.size());
     }
   }
-  if (!tr.ok || !(alpha > 0)) {
-    // The prediction may have been the problem: retry from the last pose before giving up.
-    T_c_ref = frames_.back().T_ref_c.inverse();
-    alpha = std::exp(frames_.back().a), beta = frames_.back().b;
-    if (!tracker.track(image, T_c_ref, alpha, beta).ok || !(alpha > 0)) {
-      photometric_failed_ = true;
-      return keepForGeometry(t, image);
-    }
-  }
+  if (tr.ok && alpha > 0) return true;
+  // The prediction may have been the problem: retry from the last pose before giving up.
+  T_c_ref = frames_.back().T_ref_c.inverse();
+  alpha = std::exp(frames_.back().a), beta = frames_.back().b;
+  return tracker.track(image, T_c_ref, alpha, beta).ok && alpha > 0;
+}
 
-  // Two-frame photometric BA, pose and inverse depths together, coarse-to-fine: the same points on
-  // every pyramid level (their pattern spans more of the scene on coarse levels), so that depths far
-  // from the constant start (large motion between the first frames) come into the basin.
+// Two-frame photometric BA, pose and inverse depths together, coarse-to-fine: the same points on every
+// pyramid level (their pattern spans more of the scene on coarse levels), so that depths far from the
+// constant start (large motion between the first frames) come into the basin. fr[1] and pts hold the
+// result.
+BaStats Bootstrap::twoFrameBa(const cv::Mat& image, const SE3& T_c_ref, double alpha, double beta,
+                              std::vector<BaFrame>& fr, std::vector<BaPoint>& pts) const {
+  const FrameTracker tracker(cam_, cfg_.tracker);
   std::vector<cv::Mat> ref_pyr, cur_pyr;
   tracker.pyramid(ref_.image, ref_pyr);
   tracker.pyramid(image, cur_pyr);
-  std::vector<BaFrame> fr(2);
+  fr.assign(2, BaFrame{});
   fr[0].fixed = true;
   fr[1].T_w_c = T_c_ref.inverse();
   fr[1].a = std::log(alpha), fr[1].b = beta;
-  std::vector<BaPoint> pts;
+  pts.clear();
   pts.reserve(ref_.points.size());
   for (const KeyframePoint& p : ref_.points) {
     BaPoint bp;
@@ -157,8 +158,27 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     }
     st = PhotometricBA(c, cfg_.ba).optimize(fr, pts);
   }
+  return st;
+}
 
-  rmse_ = st.final_rmse;
+bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
+  if (done_) throw std::logic_error("Bootstrap::add after initialization");
+  last_image_ = image;
+  if (!has_ref_) {
+    setReference(t, image);
+    return false;
+  }
+  if (tryGeometry(t, image)) return true;
+  if (photometric_failed_) return keepForGeometry(t, image);
+  SE3 T_c_ref;
+  double alpha = 1, beta = 0;
+  if (!alignToReference(image, hint, T_c_ref, alpha, beta)) {
+    photometric_failed_ = true;
+    return keepForGeometry(t, image);
+  }
+  std::vector<BaFrame> fr;
+  std::vector<BaPoint> pts;
+  rmse_ = twoFrameBa(image, T_c_ref, alpha, beta, fr, pts).final_rmse;
   // Points that do not match (occluded, out of view) keep their depth but are marked unknown.
   int inliers = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -173,8 +193,8 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
   const bool diverged = parallax_ - previous_parallax > cfg_.max_parallax_step_px;
 
   const int n_after = static_cast<int>(frames_.size()) - 1;
-  if (std::getenv("EDS_DEBUG"))
-    std::fprintf(stderr, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f\n",
+  if (logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f",
                  n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
                  fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
   if (diverged || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
@@ -247,9 +267,9 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   BaConfig bc = cfg_.ba;
   bc.iterations = 2 * cfg_.ba.iterations;
   const BaStats st = PhotometricBA(cam_, bc).optimize(fr, pts);
-  if (std::getenv("EDS_DEBUG"))
-    std::fprintf(stderr,
-                 "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f\n",
+  if (logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug,
+                 "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f",
                  g.inliers, g.points.size(), pts.size(), st.initial_rmse, st.final_rmse);
   if (st.final_rmse > cfg_.max_rmse) return false;
   for (KeyframePoint& p : ref.points) p.inv_depth = 0;

@@ -49,25 +49,7 @@ struct BootstrapConfig {
   void validate() const;
 };
 
-template <class V>
-void visitFields(V&& v, BootstrapConfig& c) {
-  v("points", c.points);
-  v("tracker", c.tracker);
-  v("ba", c.ba);
-  v("ba_levels", c.ba_levels);
-  v("depth_prior_weight", c.depth_prior_weight);
-  v("min_parallax_px", c.min_parallax_px);
-  v("min_points", c.min_points);
-  v("min_frames", c.min_frames);
-  v("max_frames", c.max_frames);
-  v("max_parallax_step_px", c.max_parallax_step_px);
-  v("max_rmse", c.max_rmse);
-  v("max_intensity", c.max_intensity);
-  v("min_intensity", c.min_intensity);
-  v("geometric", c.geometric);
-  v("geometric_init", c.geometric_init);
-  v("fill", c.fill);
-}
+EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, depth_prior_weight, min_parallax_px, min_points, min_frames, max_frames, max_parallax_step_px, max_rmse, max_intensity, min_intensity, geometric, geometric_init, fill)
 
 struct BootstrapFrame {
   TimeNs t = 0;
@@ -101,6 +83,10 @@ class Bootstrap {
 
  private:
   bool setReference(TimeNs t, const cv::Mat& image);
+  bool tryGeometry(TimeNs t, const cv::Mat& image);
+  bool alignToReference(const cv::Mat& image, const SE3* hint, SE3& T_c_ref, double& alpha, double& beta) const;
+  BaStats twoFrameBa(const cv::Mat& image, const SE3& T_c_ref, double alpha, double beta, std::vector<BaFrame>& fr,
+                     std::vector<BaPoint>& pts) const;
   double translationParallax(const SE3& T_c_ref) const;
 
   CameraModel cam_;

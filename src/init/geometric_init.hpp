@@ -28,18 +28,7 @@ struct GeometricInitConfig {
   double min_parallax_deg = 1.5;  // median angle between the two rays of the triangulated points
 };
 
-template <class V>
-void visitFields(V&& v, GeometricInitConfig& c) {
-  v("max_features", c.max_features);
-  v("quality", c.quality);
-  v("min_distance", c.min_distance);
-  v("min_flow_px", c.min_flow_px);
-  v("min_tracks", c.min_tracks);
-  v("ransac_px", c.ransac_px);
-  v("planar_ratio", c.planar_ratio);
-  v("max_reproj_px", c.max_reproj_px);
-  v("min_parallax_deg", c.min_parallax_deg);
-}
+EDS_FIELDS(GeometricInitConfig, max_features, quality, min_distance, min_flow_px, min_tracks, ransac_px, planar_ratio, max_reproj_px, min_parallax_deg)
 
 struct GeometricInitResult {
   bool planar = false;

@@ -21,11 +21,7 @@ struct DepthFillConfig {
   int neighbours = 3;             // inverse depth = median over this many nearest projections
 };
 
-template <class V>
-void visitFields(V&& v, DepthFillConfig& c) {
-  v("max_distance_px", c.max_distance_px);
-  v("neighbours", c.neighbours);
-}
+EDS_FIELDS(DepthFillConfig, max_distance_px, neighbours)
 
 // Projects world points (with the keyframe pose T_w_kf) into a pinhole camera; keeps those in front
 // of the camera and inside the image.

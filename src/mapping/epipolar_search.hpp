@@ -23,14 +23,7 @@ struct EpipolarSearchConfig {
   int max_samples = 400;     // per point (long lines are sampled more coarsely)
 };
 
-template <class V>
-void visitFields(V&& v, EpipolarSearchConfig& c) {
-  v("step_px", c.step_px);
-  v("max_rms", c.max_rms);
-  v("uniqueness", c.uniqueness);
-  v("min_line_px", c.min_line_px);
-  v("max_samples", c.max_samples);
-}
+EDS_FIELDS(EpipolarSearchConfig, step_px, max_rms, uniqueness, min_line_px, max_samples)
 
 struct SearchFrame {
   const cv::Mat* image = nullptr;  // CV_32F in [0, 1], undistorted

@@ -67,6 +67,65 @@ std::optional<double> parseDouble(const std::string& s) {
   return v;
 }
 
+// One line of an ESIM scene.txt, split into tokens, with its number parsers.
+struct SceneLine {
+  const std::string& fname;
+  std::size_t lineno;
+  std::vector<std::string> tok;
+
+  double num(std::size_t i) const {
+    if (i >= tok.size()) throw InputError(fname, lineno, "'" + tok[0] + "': missing value");
+    const auto d = parseDouble(tok[i]);
+    if (!d) throw InputError(fname, lineno, "'" + tok[0] + "': bad number '" + tok[i] + "'");
+    return *d;
+  }
+  Vec3 vec() const {
+    if (tok.size() != 4) throw InputError(fname, lineno, "'" + tok[0] + "' needs 3 numbers");
+    return Vec3(num(1), num(2), num(3));
+  }
+};
+
+// texture NAME W H TEXEL [blur_sigma_texels S]
+TextureSpec parseTexture(const SceneLine& l, const std::filesystem::path& dir, double& texel) {
+  const auto& tok = l.tok;
+  if (tok.size() < 5 || tok.size() % 2 == 0)
+    throw InputError(l.fname, l.lineno, "expected 'texture NAME W H TEXEL [blur_sigma_texels S]'");
+  TextureSpec spec;
+  spec.source = (dir / tok[1]).string();
+  const double w = l.num(2), h = l.num(3);
+  texel = l.num(4);
+  if (w < 1 || h < 1 || w != std::floor(w) || h != std::floor(h) || texel <= 0)
+    throw InputError(l.fname, l.lineno, "texture size must be positive integers and texel positive");
+  spec.width = static_cast<int>(w), spec.height = static_cast<int>(h);
+  for (std::size_t i = 5; i + 1 < tok.size(); i += 2) {
+    if (tok[i] != "blur_sigma_texels") throw InputError(l.fname, l.lineno, "unknown texture option '" + tok[i] + "'");
+    spec.blur_sigma = l.num(i + 1);
+    if (spec.blur_sigma < 0) throw InputError(l.fname, l.lineno, "blur sigma must be >= 0");
+  }
+  return spec;
+}
+
+// esim KEY VALUE ...: the settings that change what is rendered; the others are ignored.
+void parseEsimSettings(const SceneLine& l, EsimParams& params) {
+  const auto& tok = l.tok;
+  if (tok.size() % 2 == 0) throw InputError(l.fname, l.lineno, "expected 'esim KEY VALUE ...'");
+  for (std::size_t i = 1; i + 1 < tok.size(); i += 2) {
+    const double val = l.num(i + 1);
+    if (tok[i] == "Cpos")
+      params.C_pos = val;
+    else if (tok[i] == "Cneg")
+      params.C_neg = val;
+    else if (tok[i] == "refractory")
+      params.refractory_s = val;
+    else if (tok[i] == "log_eps")
+      params.log_eps = val;
+    else if (tok[i] == "use_log")
+      params.use_log = val != 0;
+    else if (tok[i] == "render_hz")
+      params.render_hz = val;
+  }
+}
+
 }  // namespace
 
 Scene readEsimSceneTxt(const std::filesystem::path& file, const std::filesystem::path& texture_dir,
@@ -84,70 +143,27 @@ Scene readEsimSceneTxt(const std::filesystem::path& file, const std::filesystem:
   for (std::size_t lineno = 1; std::getline(in, line); ++lineno) {
     if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
     std::istringstream ss(line);
-    std::vector<std::string> tok;
-    for (std::string t; ss >> t;) tok.push_back(t);
-    if (tok.empty()) continue;
-    auto num = [&](std::size_t i) {
-      if (i >= tok.size()) throw InputError(fname, lineno, "'" + tok[0] + "': missing value");
-      const auto d = parseDouble(tok[i]);
-      if (!d) throw InputError(fname, lineno, "'" + tok[0] + "': bad number '" + tok[i] + "'");
-      return *d;
-    };
-    auto vec = [&]() {
-      if (tok.size() != 4) throw InputError(fname, lineno, "'" + tok[0] + "' needs 3 numbers");
-      return Vec3(num(1), num(2), num(3));
-    };
-    const std::string& key = tok[0];
+    SceneLine l{fname, lineno, {}};
+    for (std::string t; ss >> t;) l.tok.push_back(t);
+    if (l.tok.empty()) continue;
+    const std::string& key = l.tok[0];
     if (key == "P0") {
-      P0 = vec();
+      P0 = l.vec();
     } else if (key == "n") {
-      n = vec(), n_line = lineno;
+      n = l.vec(), n_line = lineno;
     } else if (key == "u") {
-      u = vec();
+      u = l.vec();
     } else if (key == "v") {
-      v = vec(), v_line = lineno;
+      v = l.vec(), v_line = lineno;
     } else if (key == "texture") {
-      // texture NAME W H TEXEL [key value]...
-      if (tok.size() < 5 || tok.size() % 2 == 0)
-        throw InputError(fname, lineno, "expected 'texture NAME W H TEXEL [blur_sigma_texels S]'");
-      TextureSpec spec;
-      const std::filesystem::path dir = texture_dir.empty() ? file.parent_path() : texture_dir;
-      spec.source = (dir / tok[1]).string();
-      const double w = num(2), h = num(3);
-      texel = num(4);
-      if (w < 1 || h < 1 || w != std::floor(w) || h != std::floor(h) || texel <= 0)
-        throw InputError(fname, lineno, "texture size must be positive integers and texel positive");
-      spec.width = static_cast<int>(w), spec.height = static_cast<int>(h);
-      for (std::size_t i = 5; i + 1 < tok.size(); i += 2) {
-        if (tok[i] != "blur_sigma_texels")
-          throw InputError(fname, lineno, "unknown texture option '" + tok[i] + "'");
-        spec.blur_sigma = num(i + 1);
-        if (spec.blur_sigma < 0) throw InputError(fname, lineno, "blur sigma must be >= 0");
-      }
-      tex = spec;
+      tex = parseTexture(l, texture_dir.empty() ? file.parent_path() : texture_dir, texel);
     } else if (key == "intensity") {
-      if (tok.size() != 3) throw InputError(fname, lineno, "expected 'intensity OFFSET GAIN'");
-      intensity.offset = num(1), intensity.gain = num(2);
+      if (l.tok.size() != 3) throw InputError(fname, lineno, "expected 'intensity OFFSET GAIN'");
+      intensity.offset = l.num(1), intensity.gain = l.num(2);
       if (intensity.offset < 0 || intensity.gain <= 0)
         throw InputError(fname, lineno, "intensity offset must be >= 0 and gain > 0");
     } else if (key == "esim") {
-      if (tok.size() % 2 == 0) throw InputError(fname, lineno, "expected 'esim KEY VALUE ...'");
-      for (std::size_t i = 1; i + 1 < tok.size(); i += 2) {
-        const double val = num(i + 1);
-        if (tok[i] == "Cpos")
-          params.C_pos = val;
-        else if (tok[i] == "Cneg")
-          params.C_neg = val;
-        else if (tok[i] == "refractory")
-          params.refractory_s = val;
-        else if (tok[i] == "log_eps")
-          params.log_eps = val;
-        else if (tok[i] == "use_log")
-          params.use_log = val != 0;
-        else if (tok[i] == "render_hz")
-          params.render_hz = val;
-        // Other ESIM settings do not change what is rendered here: ignored.
-      }
+      parseEsimSettings(l, params);
     } else {
       throw InputError(fname, lineno, "unknown key '" + key + "'");
     }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "core/log.hpp"
 #include "system/run_stats.hpp"
 
 namespace eds {
@@ -126,10 +127,9 @@ void BackendWorker::process(KeyframeJob& job) {
   const auto t1 = Clock::now();
   const BaStats st = window_.optimize();
   const double ba_ms = msSince(t1);
-  if (std::getenv("EDS_DEBUG"))
-    std::fprintf(
-        stderr,
-        "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers\n",
+  if (logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug,
+        "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers",
         next_id_, toSeconds(job.t), pts.size(), window_.size(), window_.numPoints(), st.initial_rmse,
         st.final_rmse, st.iterations, st.outliers_removed);
   TrackingReference ref;

@@ -30,16 +30,7 @@ struct MappingConfig {
   double min_intensity = 0.02, max_intensity = 0.98;  // black or saturated pixels are not selected
 };
 
-template <class V>
-void visitFields(V&& v, MappingConfig& c) {
-  v("points", c.points);
-  v("fill", c.fill);
-  v("search", c.search);
-  v("epipolar_search", c.epipolar_search);
-  v("search_max_disagreement", c.search_max_disagreement);
-  v("min_intensity", c.min_intensity);
-  v("max_intensity", c.max_intensity);
-}
+EDS_FIELDS(MappingConfig, points, fill, search, epipolar_search, search_max_disagreement, min_intensity, max_intensity)
 
 struct KeyframeJob {
   TimeNs t = 0;

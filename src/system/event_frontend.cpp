@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "core/log.hpp"
 #include "frontend/frame_tracker.hpp"  // sampleBilinear
 
 namespace eds {
@@ -122,11 +123,11 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
   Vec6 nu = nu_;
   const TrackResult tr = tracker_.track(ef, T, nu, levels, motion);
   last_correlation_ = tr.correlation;
-  if (std::getenv("EDS_DEBUG")) {
+  if (logEnabled(LogLevel::kDebug)) {
     const Vec6 dev = motion ? Vec6((T * motion->T_ef_kf.inverse()).log()) : Vec6::Zero();
-    std::fprintf(stderr,
+    logf(LogLevel::kDebug,
                  "[events] t %.3f corr %.3f it %d pts %d prior %d sigma_t %.4f dev_t %.4f dev_r %.4f "
-                 "init_dev_t %.4f\n",
+                 "init_dev_t %.4f",
                  toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, motion != nullptr,
                  motion ? motion->sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
                  (T * T_init.inverse()).translation().norm());

@@ -31,15 +31,7 @@ struct MotionPriorConfig {
   void validate() const;
 };
 
-template <class V>
-void visitFields(V&& v, MotionPriorConfig& c) {
-  v("enabled", c.enabled);
-  v("sigma_translation", c.sigma_translation);
-  v("accel", c.accel);
-  v("sigma_rotation", c.sigma_rotation);
-  v("ang_accel", c.ang_accel);
-  v("max_gap_s", c.max_gap_s);
-}
+EDS_FIELDS(MotionPriorConfig, enabled, sigma_translation, accel, sigma_rotation, ang_accel, max_gap_s)
 
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
@@ -49,14 +41,7 @@ struct EventFrontendConfig {
   MotionPriorConfig motion_prior;
 };
 
-template <class V>
-void visitFields(V&& v, EventFrontendConfig& c) {
-  v("tracker", c.tracker);
-  v("points", c.points);
-  v("fill", c.fill);
-  v("depth_median_px", c.depth_median_px);
-  v("motion_prior", c.motion_prior);
-}
+EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, motion_prior)
 
 class EventFrontend {
  public:

@@ -42,15 +42,7 @@ struct FlowKeyframePolicyConfig {
   double lookahead_depth_ratio = 1.5;  // the flow part only where depths span this ratio (90th / 10th)
 };
 
-template <class V>
-void visitFields(V&& v, FlowKeyframePolicyConfig& c) {
-  v("flow_t", c.flow_t);
-  v("flow_rt", c.flow_rt);
-  v("min_in_view", c.min_in_view);
-  v("max_log_alpha", c.max_log_alpha);
-  v("lookahead", c.lookahead);
-  v("lookahead_depth_ratio", c.lookahead_depth_ratio);
-}
+EDS_FIELDS(FlowKeyframePolicyConfig, flow_t, flow_rt, min_in_view, max_log_alpha, lookahead, lookahead_depth_ratio)
 
 // How the two input streams of `Odometry` are merged into one time order. Items are processed in time
 // order (a frame before an event frame of the same time). A frame waits until the events have passed
@@ -65,11 +57,7 @@ struct StreamConfig {
   int max_pending_frames = 8;     // frames waiting for events; one more and the oldest goes ahead
 };
 
-template <class V>
-void visitFields(V&& v, StreamConfig& c) {
-  v("max_frame_wait_s", c.max_frame_wait_s);
-  v("max_pending_frames", c.max_pending_frames);
-}
+EDS_FIELDS(StreamConfig, max_frame_wait_s, max_pending_frames)
 
 struct OdometryConfig {
   StreamConfig stream;
@@ -108,28 +96,7 @@ struct OdometryConfig {
   double duration_s = 0;  // 0: to the end
 };
 
-template <class V>
-void visitFields(V&& v, OdometryConfig& c) {
-  v("stream", c.stream);
-  v("bootstrap", c.bootstrap);
-  v("frame_tracker", c.frame_tracker);
-  v("prior_levels", c.prior_levels);
-  v("frame_always_tries_cv", c.frame_always_tries_cv);
-  v("mapping", c.mapping);
-  v("backend", c.backend);
-  v("policy", c.policy);
-  v("threaded_backend", c.threaded_backend);
-  v("wait_for_keyframe", c.wait_for_keyframe);
-  v("use_events", c.use_events);
-  v("event_frame", c.event_frame);
-  v("events", c.events);
-  v("buffered_gate_translation", c.buffered_gate_translation);
-  v("buffered_gate_rotation_deg", c.buffered_gate_rotation_deg);
-  v("bootstrap_from_events", c.bootstrap_from_events);
-  v("frame_rate", c.frame_rate);
-  v("start_s", c.start_s);
-  v("duration_s", c.duration_s);
-}
+EDS_FIELDS(OdometryConfig, stream, bootstrap, frame_tracker, prior_levels, frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events, event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg, bootstrap_from_events, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;

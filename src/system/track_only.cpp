@@ -111,6 +111,160 @@ double recentMedian(const std::vector<double>& v) {
 
 }  // namespace
 
+namespace {
+
+// The tracking-only loop: event frames tracked against the current keyframe, a new keyframe from the
+// newest frame when the policy (or a lost track) asks.
+class TrackOnlyRun {
+ public:
+  TrackOnlyRun(const Sequence& seq, const TrackOnlyConfig& cfg, const Undistorter& und, TrackOnlyResult& res)
+      : seq_(seq),
+        cfg_(cfg),
+        cam_(und.pinhole()),
+        res_(res),
+        tracker_(cam_, cfg.tracker),
+        builder_{seq, und, cfg, std::mt19937_64(cfg.seed)},
+        frame_tracker_(cam_, cfg.frame_tracker) {
+    const Trajectory gt = seq.groundTruth();
+    if (gt.empty()) throw InputError((seq.dir() / "groundtruth.txt").string(), "empty ground truth");
+    kf_ = builder_.make(0, 0, poseAt(gt, seq.frames()[0].t), builder_.image(0));
+    adoptKeyframe();
+    res_.trajectory.push_back({kf_.t, kf_.T_w_kf});
+  }
+
+  // One event frame: a keyframe hand-over first if one is due, then the tracking.
+  void process(const EventFrame& ef) {
+    if (need_keyframe_) handOver(ef.t);
+    track(ef);
+  }
+
+ private:
+  void adoptKeyframe() {
+    tracker_.setKeyframe(kf_);
+    if (cfg_.refine_keyframes) frame_tracker_.setKeyframe(kf_);
+    kf_median_depth_ = medianDepth(kf_);
+    kf_in_view_ = tracker_.pointsInView(SE3(), cam_.width, cam_.height);
+    ++res_.keyframes;
+    res_.points_per_keyframe.push_back(static_cast<int>(tracker_.numPoints()));
+  }
+
+  // The newest frame not after t (and newer than the keyframe's) becomes the keyframe, at the event
+  // pose refined by aligning the frame to the old keyframe: frames are sharper than event frames, so
+  // this removes most of the error a hand-over would pass on. After a lost track the seed is the last
+  // good pose, and the alignment is what recovers.
+  void handOver(TimeNs t) {
+    const auto& frames = seq_.frames();
+    std::size_t f = kf_frame_;
+    while (f + 1 < frames.size() && frames[f + 1].t <= t) ++f;
+    if (f == kf_frame_) return;
+    SE3 T_w_kf_new = poseAt(res_.trajectory, frames[f].t);
+    const cv::Mat img = builder_.image(f);
+    if (cfg_.refine_keyframes) {
+      SE3 T_f_kf = T_w_kf_new.inverse() * kf_.T_w_kf;
+      double alpha = 1.0, beta = 0.0;
+      const auto t0 = Clock::now();
+      const FrameTrackResult fr = frame_tracker_.track(img, T_f_kf, alpha, beta);
+      res_.frame_track_ms.push_back(msSince(t0));
+      if (fr.ok)
+        T_w_kf_new = kf_.T_w_kf * T_f_kf.inverse();
+      else
+        res_.failures.push_back({frames[f].t, "frame alignment failed (rmse " + std::to_string(fr.rmse) +
+                                                  "); keyframe keeps the event pose"});
+    }
+    const SE3 T_w_ef = kf_.T_w_kf * T_ef_kf_.inverse();
+    const SE3 T_kfnew_kfold = T_w_kf_new.inverse() * kf_.T_w_kf;
+    kf_ = builder_.make(static_cast<int>(res_.keyframes), f, T_w_kf_new, img);
+    kf_frame_ = f;
+    adoptKeyframe();
+    T_ef_kf_ = T_w_ef.inverse() * T_w_kf_new;
+    // ν is a twist in the keyframe's frame: rotate it into the new one.
+    const Mat3 R = T_kfnew_kfold.rotationMatrix();
+    nu_.head<3>() = R * nu_.head<3>();
+    nu_.tail<3>() = R * nu_.tail<3>();
+    if (lost_) nu_.setZero();
+    t_prev_ = t_last_ = -1;
+    need_keyframe_ = lost_ = false;
+    recent_corr_.clear();
+    recent_cost_.clear();
+  }
+
+  // Lost-track check: correlation far below, or cost far above, their recent level on this keyframe.
+  std::string lostTrack(const TrackResult& tr) const {
+    if (!tr.ok || recent_corr_.size() < 3) return tr.failure;
+    const double corr_ref = recentMedian(recent_corr_), cost_ref = recentMedian(recent_cost_);
+    if (cfg_.min_correlation_ratio > 0 && tr.correlation < cfg_.min_correlation_ratio * corr_ref)
+      return "correlation " + std::to_string(tr.correlation) + " fell below " +
+             std::to_string(cfg_.min_correlation_ratio) + " of its recent median " + std::to_string(corr_ref);
+    if (cfg_.max_cost_ratio > 0 && tr.cost > cfg_.max_cost_ratio * cost_ref)
+      return "cost " + std::to_string(tr.cost) + " rose above " + std::to_string(cfg_.max_cost_ratio) +
+             " times its recent median " + std::to_string(cost_ref);
+    return tr.failure;
+  }
+
+  void writeDebugImage(const EventFrame& ef, const Vec6& nu) const {
+    cv::Mat both;
+    cv::hconcat(toGray8(ef.delta), toGray8(tracker_.predictedImage(nu, cam_.width, cam_.height)), both);
+    char name[64];
+    std::snprintf(name, sizeof name, "ef_%06zu.png", res_.event_frames - 1);
+    cv::imwrite((cfg_.debug_dir / name).string(), both);
+  }
+
+  void track(const EventFrame& ef) {
+    // Constant-velocity prediction from the last two event frames on this keyframe.
+    SE3 T_est = T_ef_kf_;
+    if (t_prev_ >= 0 && t_last_ > t_prev_) {
+      const double alpha = static_cast<double>(ef.t - t_last_) / static_cast<double>(t_last_ - t_prev_);
+      const SE3 T_step = T_ef_kf_ * T_prev_.inverse();  // previous -> last event frame
+      T_est = SE3::exp(std::clamp(alpha, 0.0, 3.0) * T_step.log()) * T_ef_kf_;
+    }
+    const auto tt = Clock::now();
+    Vec6 nu_est = nu_;
+    // Coarse-to-fine only when the prediction is weak (first frames on a keyframe, after a failure).
+    const TrackResult tr = tracker_.track(ef, T_est, nu_est, t_prev_ >= 0 ? 1 : 0);
+    res_.track_ms.push_back(msSince(tt));
+    if (!cfg_.debug_dir.empty()) writeDebugImage(ef, nu_est);
+    const std::string failure = lostTrack(tr);
+    if (!failure.empty()) {
+      res_.failures.push_back({ef.t, failure});
+      need_keyframe_ = lost_ = true;  // go on from the next keyframe
+      return;
+    }
+    ++res_.tracked;
+    recent_corr_.push_back(tr.correlation);
+    recent_cost_.push_back(tr.cost);
+    T_prev_ = T_ef_kf_;
+    t_prev_ = t_last_;
+    T_ef_kf_ = T_est;
+    nu_ = nu_est;
+    t_last_ = ef.t;
+    res_.trajectory.push_back({ef.t, kf_.T_w_kf * T_ef_kf_.inverse()});
+    const bool drop = tr.points_in_view < (1.0 - cfg_.policy.max_point_drop) * kf_in_view_;
+    const bool rotated = T_ef_kf_.so3().angle() > cfg_.policy.max_rotation_deg * M_PI / 180.0;
+    const bool moved = T_ef_kf_.translation().norm() > cfg_.policy.max_translation_ratio * kf_median_depth_;
+    need_keyframe_ = drop || rotated || moved;
+  }
+
+  const Sequence& seq_;
+  const TrackOnlyConfig& cfg_;
+  const CameraModel& cam_;
+  TrackOnlyResult& res_;
+  EventTracker tracker_;
+  KeyframeBuilder builder_;
+  FrameTracker frame_tracker_;
+  Keyframe kf_;
+  std::size_t kf_frame_ = 0;
+  double kf_median_depth_ = 1;
+  int kf_in_view_ = 0;
+  SE3 T_ef_kf_, T_prev_;  // current estimate and the one before it on this keyframe
+  Vec6 nu_ = Vec6::Zero();
+  TimeNs t_prev_ = -1, t_last_ = -1;
+  bool need_keyframe_ = false, lost_ = false;
+  // Correlations and costs of the event frames tracked on this keyframe (the lost-track check's reference).
+  std::vector<double> recent_corr_, recent_cost_;
+};
+
+}  // namespace
+
 TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   const auto wall0 = Clock::now();
   cfg.event_frame.validate();
@@ -121,45 +275,20 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
     throw std::invalid_argument("max_cost_ratio must be 0 (off) or > 1");
   if (!seq.hasFrames())
     throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
-  const Trajectory gt = seq.groundTruth();
-  if (gt.empty()) throw InputError((seq.dir() / "groundtruth.txt").string(), "empty ground truth");
   const Undistorter und(seq.camera());
-  const CameraModel& cam = und.pinhole();
-  EventTracker tracker(cam, cfg.tracker);
-  KeyframeBuilder builder{seq, und, cfg, std::mt19937_64(cfg.seed)};
-  EventFrameBuilder ef_builder(und, cfg.event_frame);
-
   TrackOnlyResult res;
+  TrackOnlyRun run(seq, cfg, und, res);
+  EventFrameBuilder ef_builder(und, cfg.event_frame);
   const auto& frames = seq.frames();
-  std::size_t kf_frame = 0;
-  Keyframe kf = builder.make(0, 0, poseAt(gt, frames[0].t), builder.image(0));
-  tracker.setKeyframe(kf);
-  FrameTracker frame_tracker(cam, cfg.frame_tracker);
-  if (cfg.refine_keyframes) frame_tracker.setKeyframe(kf);
-  double kf_median_depth = medianDepth(kf);
-  int kf_in_view = tracker.pointsInView(SE3(), cam.width, cam.height);
-  res.keyframes = 1;
-  res.points_per_keyframe.push_back(static_cast<int>(tracker.numPoints()));
-  res.trajectory.push_back({kf.t, kf.T_w_kf});
   const TimeNs t_end =
       cfg.duration_s > 0 ? frames[0].t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
-
   auto src = seq.openEvents();
   EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
                             cfg.event_frame.stride(), cfg.event_frame.lookahead());
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;
-  SE3 T_ef_kf;  // current estimate
-  Vec6 nu = Vec6::Zero();
-  // The last two tracked poses on this keyframe, for the constant-velocity prediction.
-  SE3 T_prev;
-  TimeNs t_prev = -1, t_last = -1;
-  bool need_keyframe = false, lost = false;
-  // Correlations and costs of the event frames tracked on this keyframe (the lost-track check's reference).
-  std::vector<double> recent_corr, recent_cost;
-  TimeNs first_ef_t = -1, last_ef_t = -1;
-
+  TimeNs last_ef_t = -1;
   while (packets.next(events, begin)) {
     const auto tb = Clock::now();
     ef_builder.build(*events, begin, ef, packets.base());
@@ -167,105 +296,8 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
     if (ef.t > t_end) break;
     res.build_ms.push_back(msSince(tb));
     ++res.event_frames;
-    if (first_ef_t < 0) first_ef_t = ef.t;
     last_ef_t = ef.t;
-
-    if (need_keyframe) {
-      // The newest frame not after this event frame (and newer than the keyframe's).
-      std::size_t f = kf_frame;
-      while (f + 1 < frames.size() && frames[f + 1].t <= ef.t) ++f;
-      if (f != kf_frame) {
-        SE3 T_w_kf_new = poseAt(res.trajectory, frames[f].t);
-        const cv::Mat img = builder.image(f);
-        if (cfg.refine_keyframes) {
-          // The frame aligned to the old keyframe, seeded by the event pose: frames are sharper than
-          // event frames, so this removes most of the error a keyframe hand-over would pass on. After a
-          // lost track the seed is the last good pose, and the alignment is what recovers.
-          SE3 T_f_kf = T_w_kf_new.inverse() * kf.T_w_kf;
-          double alpha = 1.0, beta = 0.0;
-          const auto t0 = Clock::now();
-          const FrameTrackResult fr = frame_tracker.track(img, T_f_kf, alpha, beta);
-          res.frame_track_ms.push_back(msSince(t0));
-          if (fr.ok)
-            T_w_kf_new = kf.T_w_kf * T_f_kf.inverse();
-          else
-            res.failures.push_back({frames[f].t, "frame alignment failed (rmse " + std::to_string(fr.rmse) +
-                                                     "); keyframe keeps the event pose"});
-        }
-        const SE3 T_w_ef = kf.T_w_kf * T_ef_kf.inverse();
-        const SE3 T_kfnew_kfold = T_w_kf_new.inverse() * kf.T_w_kf;
-        kf = builder.make(static_cast<int>(res.keyframes), f, T_w_kf_new, img);
-        tracker.setKeyframe(kf);
-        if (cfg.refine_keyframes) frame_tracker.setKeyframe(kf);
-        kf_frame = f;
-        kf_median_depth = medianDepth(kf);
-        kf_in_view = tracker.pointsInView(SE3(), cam.width, cam.height);
-        ++res.keyframes;
-        res.points_per_keyframe.push_back(static_cast<int>(tracker.numPoints()));
-        T_ef_kf = T_w_ef.inverse() * T_w_kf_new;
-        // ν is a twist in the keyframe's frame: rotate it into the new one.
-        const Mat3 R = T_kfnew_kfold.rotationMatrix();
-        nu.head<3>() = R * nu.head<3>();
-        nu.tail<3>() = R * nu.tail<3>();
-        if (lost) nu.setZero();
-        t_prev = t_last = -1;
-        need_keyframe = lost = false;
-        recent_corr.clear();
-        recent_cost.clear();
-      }
-    }
-
-    // Constant-velocity prediction from the last two event frames on this keyframe.
-    SE3 T_init = T_ef_kf;
-    if (t_prev >= 0 && t_last > t_prev) {
-      const double alpha = static_cast<double>(ef.t - t_last) / static_cast<double>(t_last - t_prev);
-      const SE3 T_step = T_ef_kf * T_prev.inverse();  // previous -> last event frame
-      T_init = SE3::exp(std::clamp(alpha, 0.0, 3.0) * T_step.log()) * T_ef_kf;
-    }
-    const auto tt = Clock::now();
-    SE3 T_est = T_init;
-    Vec6 nu_est = nu;
-    // Coarse-to-fine only when the prediction is weak (first frames on a keyframe, after a failure).
-    const TrackResult tr = tracker.track(ef, T_est, nu_est, t_prev >= 0 ? 1 : 0);
-    res.track_ms.push_back(msSince(tt));
-    if (!cfg.debug_dir.empty()) {
-      cv::Mat both;
-      cv::hconcat(toGray8(ef.delta), toGray8(tracker.predictedImage(nu_est, cam.width, cam.height)), both);
-      char name[64];
-      std::snprintf(name, sizeof name, "ef_%06zu.png", res.event_frames - 1);
-      cv::imwrite((cfg.debug_dir / name).string(), both);
-    }
-    // Lost-track check: correlation far below, or cost far above, their recent level on this keyframe.
-    std::string failure = tr.failure;
-    if (tr.ok && recent_corr.size() >= 3) {
-      const double corr_ref = recentMedian(recent_corr);
-      const double cost_ref = recentMedian(recent_cost);
-      if (cfg.min_correlation_ratio > 0 && tr.correlation < cfg.min_correlation_ratio * corr_ref)
-        failure = "correlation " + std::to_string(tr.correlation) + " fell below " +
-                  std::to_string(cfg.min_correlation_ratio) + " of its recent median " +
-                  std::to_string(corr_ref);
-      else if (cfg.max_cost_ratio > 0 && tr.cost > cfg.max_cost_ratio * cost_ref)
-        failure = "cost " + std::to_string(tr.cost) + " rose above " + std::to_string(cfg.max_cost_ratio) +
-                  " times its recent median " + std::to_string(cost_ref);
-    }
-    if (!failure.empty()) {
-      res.failures.push_back({ef.t, failure});
-      need_keyframe = lost = true;  // go on from the next keyframe
-      continue;
-    }
-    ++res.tracked;
-    recent_corr.push_back(tr.correlation);
-    recent_cost.push_back(tr.cost);
-    T_prev = T_ef_kf;
-    t_prev = t_last;
-    T_ef_kf = T_est;
-    nu = nu_est;
-    t_last = ef.t;
-    res.trajectory.push_back({ef.t, kf.T_w_kf * T_ef_kf.inverse()});
-    const bool drop = tr.points_in_view < (1.0 - cfg.policy.max_point_drop) * kf_in_view;
-    const bool rotated = T_ef_kf.so3().angle() > cfg.policy.max_rotation_deg * M_PI / 180.0;
-    const bool moved = T_ef_kf.translation().norm() > cfg.policy.max_translation_ratio * kf_median_depth;
-    need_keyframe = drop || rotated || moved;
+    run.process(ef);
   }
   if (res.event_frames == 0)
     throw InputError(seq.eventsFile().string(), "no event frame after the first frame (too few events?)");
