@@ -1,10 +1,12 @@
 #include "sim/event_sim.hpp"
 
-#include <tbb/parallel_for.h>
+#include <tbb/blocked_range.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include "core/parallel.hpp"
 
 namespace eds::sim {
 
@@ -82,7 +84,7 @@ void EventGenerator::step(const cv::Mat& log_image, TimeNs t1, EventArray& out) 
   const TimeNs t0 = t_prev_;
   const double dt = static_cast<double>(t1 - t0);
   const auto refractory = static_cast<TimeNs>(cfg_.refractory_s * 1e9);
-  tbb::parallel_for(tbb::blocked_range<int>(0, height_, 4), [&](const tbb::blocked_range<int>& rows) {
+  parallelFor(tbb::blocked_range<int>(0, height_, 4), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y) {
       auto& ev = row_events_[y];
       ev.clear();

@@ -1,11 +1,13 @@
 #include "sim/render.hpp"
 
-#include <tbb/parallel_for.h>
+#include <tbb/blocked_range.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include "core/parallel.hpp"
 
 namespace eds::sim {
 
@@ -152,7 +154,7 @@ void Renderer::render(const SE3& T_w_c, cv::Mat& intensity, cv::Mat* depth) cons
   if (depth) depth->create(H, W, CV_32F);
   const float inv_ss2 = 1.0f / static_cast<float>(ss * ss);
   // Rows of output pixels in parallel; each works on its own supersampled rows.
-  tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& rows) {
+  parallelFor(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& rows) {
     std::vector<double> zbuf(static_cast<std::size_t>(ss_w_) * ss);
     std::vector<int> hit(zbuf.size());
     std::vector<float> acc(W);
