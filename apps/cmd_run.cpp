@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "recording_options.hpp"
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
 
@@ -22,13 +23,14 @@ namespace {
 struct RunArgs {
   std::string sequence, out = "run_out", config, calib;
   bool frames_only = false;
+  RecordingArgs recording;
   OdometryConfig cli;                                      // what the options wrote
   std::vector<std::pair<CLI::Option*, std::string>> keys;  // option -> parameter name
   std::vector<std::string> sets;                           // --set KEY=VALUE, in order
 };
 
 void runRun(RunArgs& a) {
-  Sequence seq(a.sequence);
+  Sequence seq(a.sequence, a.recording.options());
   if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   // Defaults for the sensor's size, then the file, then the command line.
   OdometryConfig cfg = defaultOdometryConfig(seq.camera().width, seq.camera().height);
@@ -83,6 +85,7 @@ void addRunCommand(CLI::App& app) {
                   "Calibration instead of the sequence's own (ECD calib.txt, e.g. from `eds calibrate`, or "
                   "Kalibr YAML)")
       ->check(CLI::ExistingFile);
+  addRecordingOptions(cmd, a->recording);
   cmd->add_option("--set", a->sets,
                   "KEY=VALUE: any parameter by its name in config_used.yaml (e.g. --set "
                   "events.tracker.levels=4 --set backend.removal=oldest); applied last");

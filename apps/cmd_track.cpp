@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "recording_options.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/track_only.hpp"
 #include "system/track_reference.hpp"
@@ -17,6 +18,7 @@ namespace {
 struct TrackArgs {
   std::string sequence, out = "track_out", calib, reference, config;
   bool depth_from_gt = false, debug_images = false;
+  RecordingArgs recording;
   TrackOnlyConfig cfg;
   CLI::Option *events = nullptr, *overlap = nullptr, *duration = nullptr;
 };
@@ -53,7 +55,7 @@ void runTrack(TrackArgs& a) {
     throw std::invalid_argument(
         "eds track needs one of --depth-from-gt (depth maps of a simulated sequence) or --reference RUN_DIR "
         "(the keyframes of an `eds run`)");
-  Sequence seq(a.sequence);
+  Sequence seq(a.sequence, a.recording.options());
   if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   const std::filesystem::path out(a.out);
   std::filesystem::create_directories(out);
@@ -86,6 +88,7 @@ void addTrackCommand(CLI::App& app) {
   cmd->add_option("--calib", a->calib,
                   "Calibration instead of the sequence's own (ECD calib.txt or Kalibr YAML)")
       ->check(CLI::ExistingFile);
+  addRecordingOptions(cmd, a->recording);
   a->events = cmd->add_option("--events", a->cfg.event_frame.num_events, "Events per event frame (N)")
                   ->capture_default_str();
   a->overlap =

@@ -43,4 +43,20 @@ struct EventArray {
   }
 };
 
+// Appends src[from, from + n) to out.
+inline void appendRange(EventArray& out, const EventArray& src, std::size_t from, std::size_t n) {
+  const auto b = static_cast<std::ptrdiff_t>(from), e = b + static_cast<std::ptrdiff_t>(n);
+  out.t.insert(out.t.end(), src.t.begin() + b, src.t.begin() + e);
+  out.x.insert(out.x.end(), src.x.begin() + b, src.x.begin() + e);
+  out.y.insert(out.y.end(), src.y.begin() + b, src.y.begin() + e);
+  out.p.insert(out.p.end(), src.p.begin() + b, src.p.begin() + e);
+}
+
+// An external trigger edge (a flash, a shutter signal) recorded by the sensor beside its events.
+struct TriggerEvent {
+  TimeNs t = 0;
+  std::uint8_t channel = 0;
+  bool rising = false;
+};
+
 }  // namespace eds

@@ -2,15 +2,20 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
+#include "io/aedat4.hpp"
 #include "io/ecd_events.hpp"
 #include "io/hdf5_events.hpp"
 #include "io/kalibr.hpp"
 #include "io/line_reader.hpp"
+#include "io/prophesee.hpp"
+#include "io/ros_events.hpp"
 #include "io/text_parse.hpp"
 
 namespace eds {
@@ -106,12 +111,17 @@ std::vector<FrameRef> readImageList(const fs::path& file) {
   return frames;
 }
 
-Sequence::Sequence(const fs::path& dir) : dir_(dir) {
+Sequence::Sequence(const fs::path& dir, const SequenceOptions& options) : dir_(dir), options_(options) {
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(dir.string(), "sequence folder not found");
+  if (fs::is_regular_file(dir, ec) || (fs::is_directory(dir, ec) && fs::is_regular_file(dir / "metadata.yaml", ec))) {
+    openRecordingFile(dir);
+    return;
+  }
+  if (!fs::is_directory(dir, ec)) throw InputError(dir.string(), "sequence folder or recording file not found");
   for (const char* name : {"events.txt", "events.txt.gz", "events.h5"}) {
     if (fs::is_regular_file(dir / name, ec)) {
       events_file_ = dir / name;
+      event_storage_ = fs::path(name).extension() == ".h5" ? EventStorage::kHdf5 : EventStorage::kEcdText;
       break;
     }
   }
@@ -175,10 +185,81 @@ const CameraModel& Sequence::camera() const {
   return *camera_;
 }
 
+namespace {
+
+bool isHdf5File(const fs::path& file) {
+  static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (!f) return false;
+  char head[8] = {};
+  const bool ok = std::fread(head, 1, 8, f) == 8 && std::memcmp(head, kSignature, 8) == 0;
+  std::fclose(f);
+  return ok;
+}
+
+}  // namespace
+
+void Sequence::openRecordingFile(const fs::path& file) {
+  events_file_ = file;
+  if (looksLikeAedat4(file)) {
+    const Aedat4Counts counts = scanAedat4(file);
+    const Aedat4EventSource events(file);
+    event_storage_ = EventStorage::kAedat4;
+    format_ = "AEDAT 4.0";
+    width_ = events.width();
+    height_ = events.height();
+    imu_samples_ = counts.imu;
+    for (const Aedat4Frame& f : counts.frames) {
+      if (!frames_.empty() && f.t <= frames_.back().t)
+        throw errorAt(file.string(), f.packet_offset, "frame time stamps must increase");
+      frames_.push_back({f.t, file, f.packet_offset});
+    }
+    if (counts.events == 0) events_file_.clear();
+    return;
+  }
+  if (looksLikePropheseeRaw(file)) {
+    const PropheseeHeader h = readPropheseeHeader(file);
+    event_storage_ = EventStorage::kPropheseeRaw;
+    format_ = h.format == EvtFormat::kEvt3 ? "Prophesee EVT 3.0" : "Prophesee EVT 2.0";
+    width_ = options_.width > 0 ? options_.width : h.width;
+    height_ = options_.height > 0 ? options_.height : h.height;
+    return;
+  }
+  if (detectRosContainer(file) != RosContainer::kNone) {
+    event_storage_ = EventStorage::kRosBag;
+    RosEventSource probe(file, options_.events_topic);
+    format_ = std::string(probe.bagFormat()) + ", events on " + probe.topic().name + " (" + probe.topic().type + ")";
+    EventArray first;
+    probe.read(first, 1);  // the sensor size is in the messages
+    width_ = static_cast<int>(probe.stats().width);
+    height_ = static_cast<int>(probe.stats().height);
+    return;
+  }
+  if (isHdf5File(file)) {
+    event_storage_ = EventStorage::kHdf5;
+    format_ = "HDF5 events";
+    width_ = options_.width, height_ = options_.height;
+    return;
+  }
+  throw InputError(file.string(),
+                   "not a recording eds reads (AEDAT 4.0, Prophesee .raw, ROS 1 bag, rosbag2 .db3/.mcap, HDF5 events), "
+                   "nor a sequence folder");
+}
+
+fs::path Sequence::framesSource() const {
+  std::error_code ec;
+  return fs::is_regular_file(dir_, ec) ? dir_ : dir_ / "images.txt";
+}
+
 std::unique_ptr<EventSource> Sequence::openEvents() const {
   if (events_file_.empty())
     throw InputError((dir_ / "events.txt").string(), "file not found (this sequence has no events)");
-  if (events_file_.extension() == ".h5") {
+  if (event_storage_ == EventStorage::kPropheseeRaw)
+    return std::make_unique<PropheseeRawSource>(events_file_, PropheseeOptions{width_, height_});
+  if (event_storage_ == EventStorage::kRosBag)
+    return std::make_unique<RosEventSource>(events_file_, options_.events_topic);
+  if (event_storage_ == EventStorage::kAedat4) return std::make_unique<Aedat4EventSource>(events_file_);
+  if (event_storage_ == EventStorage::kHdf5) {
     Hdf5EventOptions opts;
     opts.width = width_;
     opts.height = height_;
@@ -193,7 +274,8 @@ std::unique_ptr<EventSource> Sequence::openEvents() const {
 cv::Mat Sequence::loadFrame(std::size_t i) const {
   if (i >= frames_.size()) throw std::out_of_range("Sequence::loadFrame: frame index out of range");
   const std::string path = frames_[i].path.string();
-  cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  cv::Mat img = event_storage_ == EventStorage::kAedat4 ? readAedat4Frame(frames_[i].path, frames_[i].offset)
+                                                        : cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (img.empty()) throw InputError(path, "cannot read image (missing or not an image)");
   if (width_ > 0 && (img.cols != width_ || img.rows != height_))
     throw InputError(path, "image size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +

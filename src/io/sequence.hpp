@@ -7,9 +7,14 @@
 //   depth/<frame name>.png                   z-depth in mm, uint16 (optional, simulated data)
 // Files are opened only when asked for, so a frames-only or events-only sequence works, and a file is
 // "missing" only when the requested work needs it.
+// A sequence can also be one recording file, told by its content: an AEDAT 4.0 file (events, frames,
+// IMU), a Prophesee EVT 2.0/3.0 `.raw` file, a ROS 1 bag, a rosbag2 (`.db3`, `.mcap`, or its folder)
+// or an HDF5 event file (DSEC layout). Calibration comes from --calib; frames, calibration and ground
+// truth inside bags are not read yet.
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,20 +27,35 @@ namespace eds {
 
 struct FrameRef {
   TimeNs t = 0;
-  std::filesystem::path path;
+  std::filesystem::path path;  // the image file (folders)
+  std::uint64_t offset = 0;    // where the frame is inside a recording file
+};
+
+// How the events of a sequence are stored.
+enum class EventStorage { kNone, kEcdText, kHdf5, kPropheseeRaw, kRosBag, kAedat4 };
+
+struct SequenceOptions {
+  std::string events_topic;   // bags: the topic to read events from (empty: the only event topic)
+  int width = 0, height = 0;  // sensor size where the recording does not give it (.raw files)
 };
 
 class Sequence {
  public:
   // Scans the folder; parses images.txt and the calibration (small files) eagerly so their errors
   // surface at once. Throws InputError if the folder does not exist or holds neither events nor frames.
-  explicit Sequence(const std::filesystem::path& dir);
+  explicit Sequence(const std::filesystem::path& dir, const SequenceOptions& options = {});
 
   const std::filesystem::path& dir() const { return dir_; }
+  // What the input is: "ECD folder", "Prophesee EVT 3.0", "ROS 1 bag", "rosbag2 (sqlite3)", ...
+  const std::string& format() const { return format_; }
+  EventStorage eventStorage() const { return event_storage_; }
+  // Where frames are (or would be) listed: dir/images.txt, or the recording file.
+  std::filesystem::path framesSource() const;
   bool hasEvents() const { return !events_file_.empty(); }
   bool hasFrames() const { return !frames_.empty(); }
   bool hasGroundTruth() const;
   bool hasCalibration() const { return camera_.has_value(); }
+  std::uint64_t imuSamples() const { return imu_samples_; }  // recorded IMU samples (not used yet)
 
   // Calibration with resolution (from the Kalibr file, else the first image, else unknown = 0).
   const CameraModel& camera() const;
@@ -57,11 +77,17 @@ class Sequence {
   int height() const { return height_; }
 
  private:
+  void openRecordingFile(const std::filesystem::path& file);
+
   std::filesystem::path dir_;
+  SequenceOptions options_;
+  std::string format_ = "ECD folder";
+  EventStorage event_storage_ = EventStorage::kNone;
   std::filesystem::path events_file_;
   std::vector<FrameRef> frames_;
   std::optional<CameraModel> camera_;
   int width_ = 0, height_ = 0;
+  std::uint64_t imu_samples_ = 0;
 };
 
 // Reads an ECD calib.txt (`fx fy cx cy [k1 k2 p1 p2 [k3]]`, radtan). The size is left at 0.

@@ -15,6 +15,7 @@ struct SequenceStats {
   double events_per_s_peak = 0;  // over windows of peak_window_ns
   TimeNs peak_window_ns = 10'000'000;
   std::size_t positive = 0;
+  std::size_t triggers = 0;  // external trigger edges recorded with the events
   std::size_t frames = 0;
   TimeNs frames_t0 = 0, frames_t1 = 0;
   double frame_rate = 0;  // frames - 1 over their span

@@ -65,8 +65,8 @@ void feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, Time
 
 OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress) {
   if (!seq.hasFrames())
-    throw InputError((seq.dir() / "images.txt").string(),
-                     "the odometry needs frames (keyframes come from them)");
+    throw InputError(seq.framesSource().string(),
+                     "the odometry needs frames (keyframes come from them); " + seq.format() + " holds none");
   if (cfg.use_events && !seq.hasEvents())
     throw InputError((seq.dir() / "events.txt").string(),
                      "no events in the sequence: run with --frames-only, or add events");

@@ -1,0 +1,233 @@
+#include "io/aedat4.hpp"
+
+#include <cstring>
+#include <opencv2/imgproc.hpp>
+
+#include "io/decompress.hpp"
+#include "io/flatbuffer_view.hpp"
+#include "io/prophesee.hpp"
+
+namespace eds {
+
+namespace {
+
+constexpr char kMagic[] = "#!AER-DAT4.0\r\n";
+constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
+constexpr std::size_t kEventBytes = 16;  // struct Event { int64 t; int16 x, y; bool on; } padded
+constexpr std::size_t kImuBytes = 48;    // struct IMU { int64 t; float temperature, acc[3], gyro[3], mag[3]; }
+constexpr std::size_t kTriggerBytes = 16;
+constexpr TimeNs kNsPerUs = 1000;
+
+// The value of `<attr key="KEY" ...>VALUE</attr>` within text.
+std::string xmlAttr(const std::string& text, const std::string& key) {
+  const std::size_t k = text.find("key=\"" + key + "\"");
+  if (k == std::string::npos) return {};
+  const std::size_t open = text.find('>', k), close = text.find('<', k);
+  return open == std::string::npos || close == std::string::npos || close < open ? std::string()
+                                                                                  : text.substr(open + 1, close - open - 1);
+}
+
+// The output streams the XML names: <node name="N" path=".../outInfo/N/"> ... </node>.
+std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
+  std::vector<Aedat4Stream> streams;
+  for (std::size_t p = xml.find("<node name=\""); p != std::string::npos; p = xml.find("<node name=\"", p + 1)) {
+    const std::size_t name_end = xml.find('"', p + 12);
+    const std::string name = xml.substr(p + 12, name_end - p - 12);
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::size_t end = xml.find("</node>", p);
+    const std::string body = xml.substr(p, end == std::string::npos ? std::string::npos : end - p);
+    Aedat4Stream s;
+    s.id = std::stoi(name);
+    s.type = xmlAttr(body, "typeIdentifier");
+    const std::string w = xmlAttr(body, "sizeX"), h = xmlAttr(body, "sizeY");
+    s.width = w.empty() ? 0 : std::atoi(w.c_str());
+    s.height = h.empty() ? 0 : std::atoi(h.c_str());
+    streams.push_back(s);
+  }
+  return streams;
+}
+
+}  // namespace
+
+bool looksLikeAedat4(const std::filesystem::path& file) {
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (!f) return false;
+  char head[kMagicSize] = {};
+  const bool ok = std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
+  std::fclose(f);
+  return ok;
+}
+
+struct Aedat4Reader::Impl {
+  BinaryFile file;
+  std::vector<Aedat4Stream> streams;
+  std::string compression = "none";
+  std::uint64_t data_start = 0, data_end = 0;
+  std::vector<std::uint8_t> raw, packet;
+
+  explicit Impl(const std::filesystem::path& path) : file(path) {
+    char magic[kMagicSize];
+    file.readExact(magic, kMagicSize, "AEDAT 4.0 magic");
+    if (std::memcmp(magic, kMagic, kMagicSize) != 0)
+      throw errorAt(file.path(), 0, "not an AEDAT 4.0 file (no '#!AER-DAT4.0' line)");
+    const auto size = file.readLe<std::int32_t>("IOHeader size");
+    if (size <= 0 || static_cast<std::uint64_t>(size) > file.size() - file.offset())
+      throw errorAt(file.path(), kMagicSize, "IOHeader size " + std::to_string(size) + " runs past the end of the file");
+    std::vector<std::uint8_t> header;
+    file.readExact(header, static_cast<std::size_t>(size), "IOHeader");
+    const ByteView view(header.data(), header.size(), &file.path(), kMagicSize + 4);
+    const FlatTable h = FlatTable::root(view);
+    static const char* kCompressions[] = {"none", "lz4", "lz4", "zstd", "zstd"};
+    const auto c = h.scalar<std::int32_t>(0, 0);
+    if (c < 0 || c > 4) throw errorAt(file.path(), kMagicSize + 4, "unknown compression " + std::to_string(c));
+    compression = kCompressions[c];
+    const auto table = h.scalar<std::int64_t>(1, -1);
+    data_start = file.offset();
+    data_end = table > 0 && static_cast<std::uint64_t>(table) <= file.size() ? static_cast<std::uint64_t>(table) : file.size();
+    streams = parseStreams(h.string(2));
+    if (streams.empty()) throw errorAt(file.path(), kMagicSize + 4, "the header describes no streams");
+  }
+
+  const Aedat4Stream* stream(int id) const {
+    for (const auto& s : streams)
+      if (s.id == id) return &s;
+    return nullptr;
+  }
+
+  bool next(Aedat4Packet& p) {
+    if (file.offset() + 8 > data_end) return false;
+    p.offset = file.offset();
+    p.stream = file.readLe<std::int32_t>("packet stream id");
+    const auto size = file.readLe<std::int32_t>("packet size");
+    const Aedat4Stream* s = stream(p.stream);
+    if (!s) throw errorAt(file.path(), p.offset, "packet of stream " + std::to_string(p.stream) + ", which the header does not describe");
+    if (size < 0 || static_cast<std::uint64_t>(size) > data_end - file.offset())
+      throw errorAt(file.path(), p.offset, "packet size " + std::to_string(size) + " runs past the end of the data");
+    file.readExact(raw, static_cast<std::size_t>(size), "packet");
+    const std::uint64_t at = p.offset + 8;
+    if (compression == "lz4")
+      lz4FrameDecompressAll(raw.data(), raw.size(), packet, file.path(), at);
+    else if (compression == "zstd")
+      zstdDecompressAll(raw.data(), raw.size(), packet, file.path(), at);
+    else
+      packet.swap(raw);
+    // A size-prefixed FlatBuffer: uint32 size, then the root offset and the 4-character identifier.
+    ByteView v(packet.data(), packet.size(), &file.path(), at);
+    const auto fb_size = v.le<std::uint32_t>("packet flatbuffer size");
+    if (fb_size != v.remaining()) throw errorAt(file.path(), at, "packet flatbuffer size disagrees with the packet");
+    p.root = v.take(fb_size, "packet flatbuffer");
+    if (p.root.size() < 8) throw errorAt(file.path(), at, "packet too short for a flatbuffer");
+    p.type.assign(reinterpret_cast<const char*>(p.root.data()) + 4, 4);
+    if (p.type != s->type)
+      throw errorAt(file.path(), p.offset, "packet of type '" + p.type + "' on stream " + std::to_string(p.stream) +
+                                               ", which the header says carries " + s->type);
+    return true;
+  }
+};
+
+Aedat4Reader::Aedat4Reader(const std::filesystem::path& file) : impl_(std::make_unique<Impl>(file)) {}
+Aedat4Reader::~Aedat4Reader() = default;
+const std::string& Aedat4Reader::path() const { return impl_->file.path(); }
+const std::vector<Aedat4Stream>& Aedat4Reader::streams() const { return impl_->streams; }
+const std::string& Aedat4Reader::compression() const { return impl_->compression; }
+bool Aedat4Reader::next(Aedat4Packet& packet) { return impl_->next(packet); }
+void Aedat4Reader::seekPacket(std::uint64_t offset) { impl_->file.seek(offset); }
+void Aedat4Reader::rewind() { impl_->file.seek(impl_->data_start); }
+
+Aedat4Counts scanAedat4(const std::filesystem::path& file) {
+  Aedat4Reader reader(file);
+  Aedat4Counts c;
+  Aedat4Packet p;
+  std::size_t n = 0;
+  while (reader.next(p)) {
+    const FlatTable root = FlatTable::root(p.root);
+    if (p.type == "EVTS") {
+      const ByteView e = root.vector(0, kEventBytes, n);
+      c.events += n;
+      for (std::size_t i = 0; i < n; ++i) c.events_on += e.data()[i * kEventBytes + 12] != 0;
+    } else if (p.type == "IMUS") {
+      root.vector(0, kImuBytes, n);
+      c.imu += n;
+    } else if (p.type == "TRIG") {
+      root.vector(0, kTriggerBytes, n);
+      c.triggers += n;
+    } else if (p.type == "FRME") {
+      c.frames.push_back({root.scalar<std::int64_t>(0, 0) * kNsPerUs, p.offset});
+    }
+  }
+  return c;
+}
+
+cv::Mat readAedat4Frame(const std::filesystem::path& file, std::uint64_t packet_offset) {
+  Aedat4Reader reader(file);
+  reader.seekPacket(packet_offset);
+  Aedat4Packet p;
+  if (!reader.next(p) || p.type != "FRME") throw errorAt(file.string(), packet_offset, "no frame packet here");
+  const FlatTable f = FlatTable::root(p.root);
+  const int w = f.scalar<std::int16_t>(6, 0), h = f.scalar<std::int16_t>(7, 0);
+  const auto format = f.scalar<std::int8_t>(5, 0);  // 0: gray, 16: BGR, 24: BGRA
+  const int channels = format == 0 ? 1 : format == 16 ? 3 : format == 24 ? 4 : 0;
+  if (channels == 0) throw errorAt(file.string(), packet_offset, "frame of unknown pixel format " + std::to_string(format));
+  std::size_t n = 0;
+  const ByteView pixels = f.vector(10, 1, n);
+  if (w <= 0 || h <= 0 || n != static_cast<std::size_t>(w) * h * channels)
+    throw errorAt(file.string(), packet_offset, "frame of " + std::to_string(n) + " bytes is not " + std::to_string(w) +
+                                                    "x" + std::to_string(h) + "x" + std::to_string(channels));
+  const cv::Mat view(h, w, CV_8UC(channels), const_cast<std::uint8_t*>(pixels.data()));
+  cv::Mat gray;
+  if (channels == 1)
+    gray = view.clone();
+  else
+    cv::cvtColor(view, gray, channels == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+  return gray;
+}
+
+Aedat4EventSource::Aedat4EventSource(const std::filesystem::path& file)
+    : reader_(std::make_unique<Aedat4Reader>(file)) {
+  for (const auto& s : reader_->streams())
+    if (s.type == "EVTS") {
+      width_ = s.width;
+      height_ = s.height;
+      break;
+    }
+}
+Aedat4EventSource::~Aedat4EventSource() = default;
+int Aedat4EventSource::width() const { return width_; }
+int Aedat4EventSource::height() const { return height_; }
+
+bool Aedat4EventSource::decodeNextBlock(EventArray& block) {
+  Aedat4Packet p;
+  std::size_t n = 0;
+  do {
+    if (!reader_->next(p)) return false;
+    if (p.type == "TRIG") {
+      FlatTable::root(p.root).vector(0, kTriggerBytes, n);
+      triggers_ += n;
+    }
+  } while (p.type != "EVTS");
+  const ByteView e = FlatTable::root(p.root).vector(0, kEventBytes, n);
+  block.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* r = e.data() + i * kEventBytes;
+    std::int64_t t;
+    std::int16_t xy[2];
+    std::memcpy(&t, r, 8);
+    std::memcpy(xy, r + 8, 4);
+    if (xy[0] < 0 || xy[1] < 0 || (width_ > 0 && (xy[0] >= width_ || xy[1] >= height_)))
+      throw errorAt(reader_->path(), p.offset, "event " + std::to_string(i) + " of the packet at pixel (" +
+                                                   std::to_string(xy[0]) + ", " + std::to_string(xy[1]) + ") outside the " +
+                                                   std::to_string(width_) + "x" + std::to_string(height_) + " sensor");
+    if (t * kNsPerUs < last_t_)
+      throw errorAt(reader_->path(), p.offset, "events out of order: event " + std::to_string(i) + " of the packet at " +
+                                                   std::to_string(t) + " us comes after one at " +
+                                                   std::to_string(last_t_ / kNsPerUs) + " us");
+    last_t_ = t * kNsPerUs;
+    block.t[i] = last_t_;
+    block.x[i] = static_cast<std::uint16_t>(xy[0]);
+    block.y[i] = static_cast<std::uint16_t>(xy[1]);
+    block.p[i] = r[12] ? 1 : -1;
+  }
+  return true;
+}
+
+}  // namespace eds

@@ -1,0 +1,81 @@
+#pragma once
+// AEDAT 4.0 files (iniVation DV): a "#!AER-DAT4.0\r\n" line, a FlatBuffers IOHeader (compression, the
+// position of the data table, an XML description of the streams), then packets `int32 stream, int32
+// size, bytes` (each a size-prefixed FlatBuffer, LZ4- or Zstd-compressed as the header says), then
+// the data table. Packets are read one at a time; frames are found by a scan and decoded on demand.
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "core/events.hpp"
+#include "io/binary_file.hpp"
+#include "io/event_source.hpp"
+
+namespace eds {
+
+struct Aedat4Stream {
+  int id = -1;
+  std::string type;  // the FlatBuffers identifier: EVTS, FRME, IMUS, TRIG
+  int width = 0, height = 0;
+};
+
+struct Aedat4Packet {
+  int stream = -1;
+  std::string type;
+  std::uint64_t offset = 0;  // of the packet header in the file
+  ByteView root{nullptr, 0, nullptr, 0};  // the FlatBuffer (after its size prefix), valid until next()
+};
+
+struct Aedat4Frame {
+  TimeNs t = 0;
+  std::uint64_t packet_offset = 0;
+};
+
+bool looksLikeAedat4(const std::filesystem::path& file);
+
+class Aedat4Reader {
+ public:
+  explicit Aedat4Reader(const std::filesystem::path& file);
+  ~Aedat4Reader();
+  const std::string& path() const;
+  const std::vector<Aedat4Stream>& streams() const;
+  const std::string& compression() const;
+  bool next(Aedat4Packet& packet);
+  void seekPacket(std::uint64_t offset);
+  void rewind();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Counts of a whole file, in one pass over its packets.
+struct Aedat4Counts {
+  std::uint64_t events = 0, events_on = 0, imu = 0, triggers = 0;
+  std::vector<Aedat4Frame> frames;
+};
+Aedat4Counts scanAedat4(const std::filesystem::path& file);
+
+// The 8-bit gray image of the frame packet at `packet_offset` (colour frames are converted).
+cv::Mat readAedat4Frame(const std::filesystem::path& file, std::uint64_t packet_offset);
+
+class Aedat4EventSource : public BlockEventSource {
+ public:
+  explicit Aedat4EventSource(const std::filesystem::path& file);
+  ~Aedat4EventSource() override;
+  int width() const;
+  int height() const;
+  std::size_t triggersRead() const override { return triggers_; }
+
+ private:
+  bool decodeNextBlock(EventArray& block) override;
+  std::unique_ptr<Aedat4Reader> reader_;
+  int width_ = 0, height_ = 0;
+  TimeNs last_t_ = 0;
+  std::size_t triggers_ = 0;
+};
+
+}  // namespace eds

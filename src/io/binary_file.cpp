@@ -1,0 +1,65 @@
+#include "io/binary_file.hpp"
+
+#include <algorithm>
+#include <cerrno>
+
+namespace eds {
+
+InputError errorAt(const std::string& file, std::uint64_t offset, const std::string& what) {
+  return InputError(file, "byte " + std::to_string(offset) + ": " + what);
+}
+
+BinaryFile::BinaryFile(const std::filesystem::path& path) : path_(path.string()) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path_, "file not found");
+  file_ = std::fopen(path_.c_str(), "rb");
+  if (!file_) throw InputError(path_, std::string("cannot open: ") + std::strerror(errno));
+  size_ = std::filesystem::file_size(path, ec);
+  if (ec) throw InputError(path_, "cannot read its size: " + ec.message());
+}
+
+BinaryFile::~BinaryFile() {
+  if (file_) std::fclose(file_);
+}
+
+void BinaryFile::seek(std::uint64_t offset) {
+  if (offset > size_) throw error("seek to byte " + std::to_string(offset) + " past the end of the file");
+  if (fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) throw error("cannot seek");
+  offset_ = offset;
+}
+
+std::size_t BinaryFile::readSome(void* dst, std::size_t n) {
+  const std::size_t got = std::fread(dst, 1, n, file_);
+  if (got < n && std::ferror(file_)) throw error(std::string("read failed: ") + std::strerror(errno));
+  offset_ += got;
+  return got;
+}
+
+void BinaryFile::readExact(void* dst, std::size_t n, const char* what) {
+  if (n > size_ - std::min(offset_, size_))
+    throw error(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
+                std::to_string(size_ - offset_) + " left in the file");
+  if (readSome(dst, n) != n) throw error(std::string("truncated: ") + what);
+}
+
+void BinaryFile::readExact(std::vector<std::uint8_t>& dst, std::size_t n, const char* what) {
+  if (n > size_ - std::min(offset_, size_))
+    throw error(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
+                std::to_string(size_ - offset_) + " left in the file");
+  dst.resize(n);
+  readExact(dst.data(), n, what);
+}
+
+bool BinaryFile::readLine(std::string& line, std::size_t max_length) {
+  line.clear();
+  if (atEnd()) return false;
+  for (int c; (c = std::fgetc(file_)) != EOF;) {
+    ++offset_;
+    if (c == '\n') return true;
+    if (line.size() >= max_length) throw error("line longer than " + std::to_string(max_length) + " bytes");
+    line.push_back(static_cast<char>(c));
+  }
+  return true;
+}
+
+}  // namespace eds
