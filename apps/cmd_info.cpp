@@ -46,8 +46,9 @@ void printText(const Sequence& seq, const SequenceStats& s) {
                 toSeconds(s.frames_t1), s.frame_rate);
   else
     std::printf("frames       none\n");
-  if (seq.imuSamples() > 0) std::printf("imu          %llu samples (not used by the odometry yet)\n",
-                                        static_cast<unsigned long long>(seq.imuSamples()));
+  if (seq.imuSamples() > 0)
+    std::printf("imu          %llu samples (not used by the odometry yet)\n",
+                static_cast<unsigned long long>(seq.imuSamples()));
   if (s.gt_poses > 0)
     std::printf("ground truth %zu poses, %.6f .. %.6f s (%.3f s)\n", s.gt_poses, toSeconds(s.gt_t0),
                 toSeconds(s.gt_t1), toSeconds(s.gt_t1 - s.gt_t0));
@@ -88,7 +89,8 @@ void runInfo(const InfoArgs& a) {
 }  // namespace
 
 void addInfoCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("info", "Print what a sequence or recording holds (format, sizes, counts, spans)");
+  auto* cmd =
+      app.add_subcommand("info", "Print what a sequence or recording holds (format, sizes, counts, spans)");
   auto a = std::make_shared<InfoArgs>();
   cmd->add_option("path", a->path,
                   "Sequence folder (ECD layout) or recording: Prophesee .raw, ROS 1 .bag, rosbag2 .db3/.mcap "

@@ -33,7 +33,7 @@ void runRun(RunArgs& a) {
   Sequence seq(a.sequence, a.recording.options());
   if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   // Defaults for the sensor's size, then the file, then the command line.
-  OdometryConfig cfg = defaultOdometryConfig(seq.camera().width, seq.camera().height);
+  OdometryConfig cfg = defaultOdometryConfig(seq.width(), seq.height());
   if (!a.config.empty()) loadOdometryConfig(a.config, cfg);
   for (const auto& [opt, key] : a.keys)
     if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
@@ -104,14 +104,14 @@ void addRunCommand(CLI::App& app) {
   param("--start", c.start_s, "start_s", "Seconds to skip from the first frame");
   param("--duration", c.duration_s, "duration_s", "Seconds to process (0: to the end)");
   // Defaults that depend on the sensor's size (defaultOdometryConfig) say so instead of one number.
-  const auto sized = [&](const std::string& name, auto& field, const std::string& key, const std::string& help,
-                         const std::string& defaults) {
+  const auto sized = [&](const std::string& name, auto& field, const std::string& key,
+                         const std::string& help, const std::string& defaults) {
     a->keys.emplace_back(cmd->add_option(name, field, help)->default_str(defaults), key);
   };
   sized("--events", c.event_frame.num_events, "event_frame.num_events", "Events per event frame (N)",
         "20000 up to 240x180, 80000 from 640x480, scaled with the pixels between");
-  sized("--overlap", c.event_frame.overlap, "event_frame.overlap", "Overlap of consecutive event frames, [0, 1)",
-        "0.5 up to 240x180, 0.6 from 640x480");
+  sized("--overlap", c.event_frame.overlap, "event_frame.overlap",
+        "Overlap of consecutive event frames, [0, 1)", "0.5 up to 240x180, 0.6 from 640x480");
   param("--window", c.backend.window, "backend.window", "Keyframes in the back-end window");
   sized("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
         "Points each keyframe hosts in the back-end", "300 up to 240x180, 600 from 640x480");

@@ -82,7 +82,8 @@ void addTrackCommand(CLI::App& app) {
   cmd->add_option("--reference", a->reference,
                   "Track against the keyframes of this `eds run` output folder (its keyframes/)")
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--config", a->config, "With --reference: YAML parameters of the event front-end (as eds run)")
+  cmd->add_option("--config", a->config,
+                  "With --reference: YAML parameters of the event front-end (as eds run)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
   cmd->add_option("--calib", a->calib,
@@ -107,8 +108,9 @@ void addTrackCommand(CLI::App& app) {
                   "Median-filter keyframe inverse depths over this radius, px (0: off)")
       ->capture_default_str();
   cmd->add_option("--seed", a->cfg.seed, "Seed of the depth noise")->capture_default_str();
-  a->duration = cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process from the first frame (0: all)")
-                    ->capture_default_str();
+  a->duration =
+      cmd->add_option("--duration", a->cfg.duration_s, "Seconds to process from the first frame (0: all)")
+          ->capture_default_str();
   cmd->add_option("--kf-rotation", a->cfg.policy.max_rotation_deg, "New keyframe above this rotation, deg")
       ->capture_default_str();
   cmd->add_option("--kf-translation", a->cfg.policy.max_translation_ratio,

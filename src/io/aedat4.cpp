@@ -14,7 +14,7 @@ namespace {
 constexpr char kMagic[] = "#!AER-DAT4.0\r\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEventBytes = 16;  // struct Event { int64 t; int16 x, y; bool on; } padded
-constexpr std::size_t kImuBytes = 48;    // struct IMU { int64 t; float temperature, acc[3], gyro[3], mag[3]; }
+constexpr std::size_t kImuBytes = 48;  // struct IMU { int64 t; float temperature, acc[3], gyro[3], mag[3]; }
 constexpr std::size_t kTriggerBytes = 16;
 constexpr TimeNs kNsPerUs = 1000;
 
@@ -23,14 +23,16 @@ std::string xmlAttr(const std::string& text, const std::string& key) {
   const std::size_t k = text.find("key=\"" + key + "\"");
   if (k == std::string::npos) return {};
   const std::size_t open = text.find('>', k), close = text.find('<', k);
-  return open == std::string::npos || close == std::string::npos || close < open ? std::string()
-                                                                                  : text.substr(open + 1, close - open - 1);
+  return open == std::string::npos || close == std::string::npos || close < open
+             ? std::string()
+             : text.substr(open + 1, close - open - 1);
 }
 
 // The output streams the XML names: <node name="N" path=".../outInfo/N/"> ... </node>.
 std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
   std::vector<Aedat4Stream> streams;
-  for (std::size_t p = xml.find("<node name=\""); p != std::string::npos; p = xml.find("<node name=\"", p + 1)) {
+  for (std::size_t p = xml.find("<node name=\""); p != std::string::npos;
+       p = xml.find("<node name=\"", p + 1)) {
     const std::size_t name_end = xml.find('"', p + 12);
     const std::string name = xml.substr(p + 12, name_end - p - 12);
     if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
@@ -53,7 +55,8 @@ bool looksLikeAedat4(const std::filesystem::path& file) {
   std::FILE* f = std::fopen(file.c_str(), "rb");
   if (!f) return false;
   char head[kMagicSize] = {};
-  const bool ok = std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
+  const bool ok =
+      std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
   std::fclose(f);
   return ok;
 }
@@ -72,18 +75,22 @@ struct Aedat4Reader::Impl {
       throw errorAt(file.path(), 0, "not an AEDAT 4.0 file (no '#!AER-DAT4.0' line)");
     const auto size = file.readLe<std::int32_t>("IOHeader size");
     if (size <= 0 || static_cast<std::uint64_t>(size) > file.size() - file.offset())
-      throw errorAt(file.path(), kMagicSize, "IOHeader size " + std::to_string(size) + " runs past the end of the file");
+      throw errorAt(file.path(), kMagicSize,
+                    "IOHeader size " + std::to_string(size) + " runs past the end of the file");
     std::vector<std::uint8_t> header;
     file.readExact(header, static_cast<std::size_t>(size), "IOHeader");
     const ByteView view(header.data(), header.size(), &file.path(), kMagicSize + 4);
     const FlatTable h = FlatTable::root(view);
     static const char* kCompressions[] = {"none", "lz4", "lz4", "zstd", "zstd"};
     const auto c = h.scalar<std::int32_t>(0, 0);
-    if (c < 0 || c > 4) throw errorAt(file.path(), kMagicSize + 4, "unknown compression " + std::to_string(c));
+    if (c < 0 || c > 4)
+      throw errorAt(file.path(), kMagicSize + 4, "unknown compression " + std::to_string(c));
     compression = kCompressions[c];
     const auto table = h.scalar<std::int64_t>(1, -1);
     data_start = file.offset();
-    data_end = table > 0 && static_cast<std::uint64_t>(table) <= file.size() ? static_cast<std::uint64_t>(table) : file.size();
+    data_end = table > 0 && static_cast<std::uint64_t>(table) <= file.size()
+                   ? static_cast<std::uint64_t>(table)
+                   : file.size();
     streams = parseStreams(h.string(2));
     if (streams.empty()) throw errorAt(file.path(), kMagicSize + 4, "the header describes no streams");
   }
@@ -100,9 +107,12 @@ struct Aedat4Reader::Impl {
     p.stream = file.readLe<std::int32_t>("packet stream id");
     const auto size = file.readLe<std::int32_t>("packet size");
     const Aedat4Stream* s = stream(p.stream);
-    if (!s) throw errorAt(file.path(), p.offset, "packet of stream " + std::to_string(p.stream) + ", which the header does not describe");
+    if (!s)
+      throw errorAt(file.path(), p.offset,
+                    "packet of stream " + std::to_string(p.stream) + ", which the header does not describe");
     if (size < 0 || static_cast<std::uint64_t>(size) > data_end - file.offset())
-      throw errorAt(file.path(), p.offset, "packet size " + std::to_string(size) + " runs past the end of the data");
+      throw errorAt(file.path(), p.offset,
+                    "packet size " + std::to_string(size) + " runs past the end of the data");
     file.readExact(raw, static_cast<std::size_t>(size), "packet");
     const std::uint64_t at = p.offset + 8;
     if (compression == "lz4")
@@ -114,13 +124,15 @@ struct Aedat4Reader::Impl {
     // A size-prefixed FlatBuffer: uint32 size, then the root offset and the 4-character identifier.
     ByteView v(packet.data(), packet.size(), &file.path(), at);
     const auto fb_size = v.le<std::uint32_t>("packet flatbuffer size");
-    if (fb_size != v.remaining()) throw errorAt(file.path(), at, "packet flatbuffer size disagrees with the packet");
+    if (fb_size != v.remaining())
+      throw errorAt(file.path(), at, "packet flatbuffer size disagrees with the packet");
     p.root = v.take(fb_size, "packet flatbuffer");
     if (p.root.size() < 8) throw errorAt(file.path(), at, "packet too short for a flatbuffer");
     p.type.assign(reinterpret_cast<const char*>(p.root.data()) + 4, 4);
     if (p.type != s->type)
-      throw errorAt(file.path(), p.offset, "packet of type '" + p.type + "' on stream " + std::to_string(p.stream) +
-                                               ", which the header says carries " + s->type);
+      throw errorAt(file.path(), p.offset,
+                    "packet of type '" + p.type + "' on stream " + std::to_string(p.stream) +
+                        ", which the header says carries " + s->type);
     return true;
   }
 };
@@ -162,17 +174,20 @@ cv::Mat readAedat4Frame(const std::filesystem::path& file, std::uint64_t packet_
   Aedat4Reader reader(file);
   reader.seekPacket(packet_offset);
   Aedat4Packet p;
-  if (!reader.next(p) || p.type != "FRME") throw errorAt(file.string(), packet_offset, "no frame packet here");
+  if (!reader.next(p) || p.type != "FRME")
+    throw errorAt(file.string(), packet_offset, "no frame packet here");
   const FlatTable f = FlatTable::root(p.root);
   const int w = f.scalar<std::int16_t>(6, 0), h = f.scalar<std::int16_t>(7, 0);
   const auto format = f.scalar<std::int8_t>(5, 0);  // 0: gray, 16: BGR, 24: BGRA
   const int channels = format == 0 ? 1 : format == 16 ? 3 : format == 24 ? 4 : 0;
-  if (channels == 0) throw errorAt(file.string(), packet_offset, "frame of unknown pixel format " + std::to_string(format));
+  if (channels == 0)
+    throw errorAt(file.string(), packet_offset, "frame of unknown pixel format " + std::to_string(format));
   std::size_t n = 0;
   const ByteView pixels = f.vector(10, 1, n);
   if (w <= 0 || h <= 0 || n != static_cast<std::size_t>(w) * h * channels)
-    throw errorAt(file.string(), packet_offset, "frame of " + std::to_string(n) + " bytes is not " + std::to_string(w) +
-                                                    "x" + std::to_string(h) + "x" + std::to_string(channels));
+    throw errorAt(file.string(), packet_offset,
+                  "frame of " + std::to_string(n) + " bytes is not " + std::to_string(w) + "x" +
+                      std::to_string(h) + "x" + std::to_string(channels));
   const cv::Mat view(h, w, CV_8UC(channels), const_cast<std::uint8_t*>(pixels.data()));
   cv::Mat gray;
   if (channels == 1)
@@ -214,13 +229,15 @@ bool Aedat4EventSource::decodeNextBlock(EventArray& block) {
     std::memcpy(&t, r, 8);
     std::memcpy(xy, r + 8, 4);
     if (xy[0] < 0 || xy[1] < 0 || (width_ > 0 && (xy[0] >= width_ || xy[1] >= height_)))
-      throw errorAt(reader_->path(), p.offset, "event " + std::to_string(i) + " of the packet at pixel (" +
-                                                   std::to_string(xy[0]) + ", " + std::to_string(xy[1]) + ") outside the " +
-                                                   std::to_string(width_) + "x" + std::to_string(height_) + " sensor");
+      throw errorAt(reader_->path(), p.offset,
+                    "event " + std::to_string(i) + " of the packet at pixel (" + std::to_string(xy[0]) +
+                        ", " + std::to_string(xy[1]) + ") outside the " + std::to_string(width_) + "x" +
+                        std::to_string(height_) + " sensor");
     if (t * kNsPerUs < last_t_)
-      throw errorAt(reader_->path(), p.offset, "events out of order: event " + std::to_string(i) + " of the packet at " +
-                                                   std::to_string(t) + " us comes after one at " +
-                                                   std::to_string(last_t_ / kNsPerUs) + " us");
+      throw errorAt(reader_->path(), p.offset,
+                    "events out of order: event " + std::to_string(i) + " of the packet at " +
+                        std::to_string(t) + " us comes after one at " + std::to_string(last_t_ / kNsPerUs) +
+                        " us");
     last_t_ = t * kNsPerUs;
     block.t[i] = last_t_;
     block.x[i] = static_cast<std::uint16_t>(xy[0]);

@@ -25,7 +25,7 @@ struct Aedat4Stream {
 struct Aedat4Packet {
   int stream = -1;
   std::string type;
-  std::uint64_t offset = 0;  // of the packet header in the file
+  std::uint64_t offset = 0;               // of the packet header in the file
   ByteView root{nullptr, 0, nullptr, 0};  // the FlatBuffer (after its size prefix), valid until next()
 };
 

@@ -1,9 +1,9 @@
+#include "io/decompress.hpp"
+
 #include <lz4frame.h>
 #include <zstd.h>
 
 #include <algorithm>
-
-#include "io/decompress.hpp"
 
 namespace eds {
 
@@ -30,17 +30,20 @@ void lz4FrameDecompress(const std::uint8_t* in, std::size_t in_size, std::vector
   }
   LZ4F_freeDecompressionContext(ctx);
   if (ret != 0 || dst_pos != out.size())
-    throw errorAt(file, offset, "lz4 block decompresses to " + std::to_string(dst_pos) + (ret != 0 ? "+" : "") +
-                                    " bytes, not the " + std::to_string(out.size()) + " its record says");
+    throw errorAt(file, offset,
+                  "lz4 block decompresses to " + std::to_string(dst_pos) + (ret != 0 ? "+" : "") +
+                      " bytes, not the " + std::to_string(out.size()) + " its record says");
 }
 
 void zstdDecompress(const std::uint8_t* in, std::size_t in_size, std::vector<std::uint8_t>& out,
                     const std::string& file, std::uint64_t offset) {
   const std::size_t n = ZSTD_decompress(out.data(), out.size(), in, in_size);
-  if (ZSTD_isError(n)) throw errorAt(file, offset, std::string("corrupt zstd block: ") + ZSTD_getErrorName(n));
+  if (ZSTD_isError(n))
+    throw errorAt(file, offset, std::string("corrupt zstd block: ") + ZSTD_getErrorName(n));
   if (n != out.size())
-    throw errorAt(file, offset, "zstd block decompresses to " + std::to_string(n) + " bytes, not the " +
-                                    std::to_string(out.size()) + " its record says");
+    throw errorAt(file, offset,
+                  "zstd block decompresses to " + std::to_string(n) + " bytes, not the " +
+                      std::to_string(out.size()) + " its record says");
 }
 
 void lz4FrameDecompressAll(const std::uint8_t* in, std::size_t in_size, std::vector<std::uint8_t>& out,
@@ -63,7 +66,8 @@ void lz4FrameDecompressAll(const std::uint8_t* in, std::size_t in_size, std::vec
     if (src_pos == in_size && dst_n == 0) break;  // input used up before the frame's end
   }
   LZ4F_freeDecompressionContext(ctx);
-  if (LZ4F_isError(ret)) throw errorAt(file, offset, std::string("corrupt lz4 block: ") + LZ4F_getErrorName(ret));
+  if (LZ4F_isError(ret))
+    throw errorAt(file, offset, std::string("corrupt lz4 block: ") + LZ4F_getErrorName(ret));
   if (ret != 0) throw errorAt(file, offset, "corrupt lz4 block: the frame ends early or is too large");
   out.resize(dst_pos);
 }
@@ -95,7 +99,8 @@ void zstdDecompressAll(const std::uint8_t* in, std::size_t in_size, std::vector<
     if (src.pos + dst.pos == before) break;
   }
   ZSTD_freeDStream(ds);
-  if (ZSTD_isError(ret)) throw errorAt(file, offset, std::string("corrupt zstd block: ") + ZSTD_getErrorName(ret));
+  if (ZSTD_isError(ret))
+    throw errorAt(file, offset, std::string("corrupt zstd block: ") + ZSTD_getErrorName(ret));
   if (ret != 0) throw errorAt(file, offset, "corrupt zstd block: the frame ends early or is too large");
   out.resize(dst.pos);
 }

@@ -43,7 +43,8 @@ class FlatTable {
     v.seek(p + v.le<std::uint32_t>("flatbuffer vector offset"));
     count = v.le<std::uint32_t>("flatbuffer vector length");
     if (element_bytes != 0 && count > v.remaining() / element_bytes)
-      throw v.error(v.pos(), "flatbuffer vector of " + std::to_string(count) + " elements runs past its buffer");
+      throw v.error(v.pos(),
+                    "flatbuffer vector of " + std::to_string(count) + " elements runs past its buffer");
     return v.take(count * element_bytes, "flatbuffer vector");
   }
   std::string string(int index) const {
@@ -70,7 +71,8 @@ class FlatTable {
     vtable_ = static_cast<std::size_t>(vt);
     v.seek(vtable_);
     vtable_size_ = v.le<std::uint16_t>("flatbuffer vtable size");
-    if (vtable_ + vtable_size_ > buf_.size()) throw buf_.error(vtable_, "flatbuffer vtable runs past its buffer");
+    if (vtable_ + vtable_size_ > buf_.size())
+      throw buf_.error(vtable_, "flatbuffer vtable runs past its buffer");
   }
 
   ByteView buf_;

@@ -13,8 +13,14 @@ constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 constexpr std::uint64_t kMaxRecordBytes = 1ull << 31;
 
 enum Op : std::uint8_t {
-  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06,
-  kStatistics = 0x0B, kDataEnd = 0x0F
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kStatistics = 0x0B,
+  kDataEnd = 0x0F
 };
 
 std::string mcapString(ByteView& v, const char* what) {
@@ -74,7 +80,8 @@ class McapBag : public RosBagReader {
     op_ = file_.readLe<std::uint8_t>("record opcode");
     const auto len = file_.readLe<std::uint64_t>("record length");
     if (len > kMaxRecordBytes || len > file_.size() - file_.offset())
-      throw errorAt(file_.path(), at, "record length " + std::to_string(len) + " runs past the end of the file");
+      throw errorAt(file_.path(), at,
+                    "record length " + std::to_string(len) + " runs past the end of the file");
     file_.readExact(record_, static_cast<std::size_t>(len), "record");
     return ByteView(record_.data(), record_.size(), &file_.path(), at + 9);
   }
@@ -91,7 +98,8 @@ class McapBag : public RosBagReader {
     v.skip(4);  // crc
     const std::string compression = mcapString(v, "chunk compression");
     const auto len = v.le<std::uint64_t>("chunk records length");
-    const ByteView data = v.take(static_cast<std::size_t>(std::min<std::uint64_t>(len, kMaxRecordBytes)), "chunk records");
+    const ByteView data =
+        v.take(static_cast<std::size_t>(std::min<std::uint64_t>(len, kMaxRecordBytes)), "chunk records");
     const std::uint64_t at = data.absolute(0);
     if (size > kMaxRecordBytes) throw errorAt(file_.path(), at, "chunk size too large");
     if (compression.empty()) {
@@ -123,7 +131,9 @@ class McapBag : public RosBagReader {
       msg.t_record = static_cast<TimeNs>(v.le<std::uint64_t>("message log time"));
       v.skip(8);  // publish time
       const auto it = channel_topic_.find(channel);
-      if (it == channel_topic_.end()) throw v.error(0, "message on channel " + std::to_string(channel) + ", which is not defined before it");
+      if (it == channel_topic_.end())
+        throw v.error(0,
+                      "message on channel " + std::to_string(channel) + ", which is not defined before it");
       msg.topic = it->second;
       msg.index = index_++;
       msg.data = v.take(v.remaining(), "message data");
@@ -144,7 +154,8 @@ class McapBag : public RosBagReader {
     else if (encoding == "ros1")
       t.serialization = RosSerialization::kRos1;
     else
-      throw v.error(0, "channel " + t.name + " has message encoding '" + encoding + "' (cdr and ros1 are read)");
+      throw v.error(0,
+                    "channel " + t.name + " has message encoding '" + encoding + "' (cdr and ros1 are read)");
     const auto s = schemas_.find(schema);
     t.type = s == schemas_.end() ? std::string() : normalizeRosType(s->second);
     t.messages = channel_counts_.count(id) ? channel_counts_[id] : 0;
@@ -160,7 +171,8 @@ class McapBag : public RosBagReader {
     if (summary_start == 0 || summary_start >= file_.size()) return;
     file_.seek(summary_start);
     std::vector<std::uint8_t> summary;
-    file_.readExact(summary, static_cast<std::size_t>(file_.size() - 8 - 29 - summary_start), "summary section");
+    file_.readExact(summary, static_cast<std::size_t>(file_.size() - 8 - 29 - summary_start),
+                    "summary section");
     ByteView s(summary.data(), summary.size(), &file_.path(), summary_start);
     std::vector<std::pair<std::uint8_t, ByteView>> records;
     while (s.remaining() > 0) {
@@ -200,6 +212,8 @@ class McapBag : public RosBagReader {
 
 }  // namespace
 
-std::unique_ptr<RosBagReader> openMcap(const std::filesystem::path& file) { return std::make_unique<McapBag>(file); }
+std::unique_ptr<RosBagReader> openMcap(const std::filesystem::path& file) {
+  return std::make_unique<McapBag>(file);
+}
 
 }  // namespace eds

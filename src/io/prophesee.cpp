@@ -75,9 +75,9 @@ void Evt3Decoder::decode(const std::uint16_t* words, std::size_t n, EventArray& 
     }
     if (!have_time_) continue;  // no time yet: nothing can be placed
     switch (type) {
-      case 0x0: y_ = w & 0x7FF; break;                                         // ADDR_Y
+      case 0x0: y_ = w & 0x7FF; break;                                            // ADDR_Y
       case 0x2: cd.push_back(now(), w & 0x7FF, y_, (w & 0x800) ? 1 : -1); break;  // ADDR_X: one event
-      case 0x3:                                                                // VECT_BASE_X
+      case 0x3:                                                                   // VECT_BASE_X
         base_x_ = w & 0x7FF;
         vector_polarity_ = (w & 0x800) ? 1 : -1;
         break;
@@ -91,7 +91,9 @@ void Evt3Decoder::decode(const std::uint16_t* words, std::size_t n, EventArray& 
         break;
       }
       case 0xA: triggers.push_back({now(), static_cast<std::uint8_t>((w >> 8) & 0xF), (w & 1) != 0}); break;
-      case 0x7: case 0xE: case 0xF: break;  // CONTINUED_4, OTHERS, CONTINUED_12: no CD data
+      case 0x7:
+      case 0xE:
+      case 0xF: break;  // CONTINUED_4, OTHERS, CONTINUED_12: no CD data
       default: throw EvtWordError{i, type};
     }
   }
@@ -168,7 +170,8 @@ PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
     const std::string value = sp == std::string::npos ? "" : line.substr(sp + 1);
     if (key == "evt") {
       if (value != "2.0" && value != "3.0")
-        throw InputError(file.string(), line_no, "unsupported event encoding 'evt " + value + "' (EVT 2.0 and 3.0 are read)");
+        throw InputError(file.string(), line_no,
+                         "unsupported event encoding 'evt " + value + "' (EVT 2.0 and 3.0 are read)");
       h.format = value == "3.0" ? EvtFormat::kEvt3 : EvtFormat::kEvt2;
       have_format = true;
     } else if (key == "format") {
@@ -182,7 +185,8 @@ PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
     }
   }
   if (line_no == 0) throw InputError(file.string(), "not a Prophesee .raw file (no '% ' header)");
-  if (!have_format) throw InputError(file.string(), "header names no event encoding ('% evt 3.0' or '% format EVT3')");
+  if (!have_format)
+    throw InputError(file.string(), "header names no event encoding ('% evt 3.0' or '% format EVT3')");
   h.sensor = plugin.empty() ? integrator : plugin;
   if (h.width <= 0 || h.height <= 0) {
     h.width = h.height = 0;
@@ -257,8 +261,9 @@ struct PropheseeRawSource::Impl {
     for (std::size_t i = 0; i < pending.size(); ++i)
       if (pending.x[i] >= header.width || pending.y[i] >= header.height)
         throw errorAt(file.path(), block_offset,
-                      "event at pixel (" + std::to_string(pending.x[i]) + ", " + std::to_string(pending.y[i]) +
-                          ") outside the " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                      "event at pixel (" + std::to_string(pending.x[i]) + ", " +
+                          std::to_string(pending.y[i]) + ") outside the " + std::to_string(header.width) +
+                          "x" + std::to_string(header.height) +
                           " sensor (in the block of words from this offset; --resolution sets the size)");
   }
 };

@@ -5,8 +5,8 @@
 // Times are the sensor's microseconds, converted to ns; EVT 3.0's 24-bit time wraps every 16.8 s and
 // is unwrapped here.
 #include <cstdint>
-#include <limits>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>

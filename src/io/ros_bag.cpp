@@ -90,8 +90,7 @@ RosContainer detectRosContainer(const std::filesystem::path& path) {
 std::unique_ptr<RosBagReader> openRosBag(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path.string(), "file not found");
-  const std::filesystem::path file =
-      std::filesystem::is_directory(path, ec) ? storageFileOf(path) : path;
+  const std::filesystem::path file = std::filesystem::is_directory(path, ec) ? storageFileOf(path) : path;
   if (file.empty()) throw InputError(path.string(), "folder holds no rosbag2 storage file (.db3 or .mcap)");
   switch (detectRosContainer(file)) {
     case RosContainer::kRosBag1: return std::make_unique<RosBag1Topics>(file);

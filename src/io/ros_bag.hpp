@@ -22,9 +22,9 @@ struct RosTopic {
 };
 
 struct RosMessage {
-  std::size_t topic = 0;    // index into topics()
-  TimeNs t_record = 0;      // when the recorder received it
-  std::uint64_t index = 0;  // 0-based position among all messages read
+  std::size_t topic = 0;                  // index into topics()
+  TimeNs t_record = 0;                    // when the recorder received it
+  std::uint64_t index = 0;                // 0-based position among all messages read
   ByteView data{nullptr, 0, nullptr, 0};  // valid until the next call to next()
 };
 

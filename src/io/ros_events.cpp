@@ -22,7 +22,8 @@ std::string listEventTopics(const RosBagReader& bag) {
 }  // namespace
 
 bool isEventTopicType(const std::string& type) {
-  return std::any_of(std::begin(kEventTypes), std::end(kEventTypes), [&](const char* t) { return type == t; });
+  return std::any_of(std::begin(kEventTypes), std::end(kEventTypes),
+                     [&](const char* t) { return type == t; });
 }
 
 std::size_t chooseEventTopic(const RosBagReader& bag, const std::string& wanted) {
@@ -31,7 +32,8 @@ std::size_t chooseEventTopic(const RosBagReader& bag, const std::string& wanted)
     for (std::size_t i = 0; i < topics.size(); ++i) {
       if (topics[i].name != wanted) continue;
       if (!isEventTopicType(topics[i].type))
-        throw InputError(bag.path(), "topic " + wanted + " has type " + topics[i].type + ", which carries no events");
+        throw InputError(bag.path(),
+                         "topic " + wanted + " has type " + topics[i].type + ", which carries no events");
       return i;
     }
     throw InputError(bag.path(), "no topic " + wanted + " (event topics: " + listEventTopics(bag) + ")");
@@ -40,8 +42,10 @@ std::size_t chooseEventTopic(const RosBagReader& bag, const std::string& wanted)
   for (std::size_t i = 0; i < topics.size(); ++i)
     if (isEventTopicType(topics[i].type)) found.push_back(i);
   if (found.size() == 1) return found[0];
-  if (found.empty()) throw InputError(bag.path(), "no event topic (dvs_msgs/EventArray or event_camera_msgs/EventPacket)");
-  throw InputError(bag.path(), "several event topics: " + listEventTopics(bag) + "; choose one with --events-topic");
+  if (found.empty())
+    throw InputError(bag.path(), "no event topic (dvs_msgs/EventArray or event_camera_msgs/EventPacket)");
+  throw InputError(bag.path(),
+                   "several event topics: " + listEventTopics(bag) + "; choose one with --events-topic");
 }
 
 struct RosEventSource::Impl {
@@ -55,12 +59,13 @@ struct RosEventSource::Impl {
   std::uint64_t message_index = 0;  // of the message in `pending`, for errors
 
   Impl(const std::filesystem::path& path, const std::string& wanted)
-      : bag(openRosBag(path)), topic(chooseEventTopic(*bag, wanted)),
+      : bag(openRosBag(path)),
+        topic(chooseEventTopic(*bag, wanted)),
         packets(bag->topics()[topic].type == "event_camera_msgs/EventPacket") {}
 
   InputError error(const std::string& what) const {
-    return InputError(bag->path(), "message " + std::to_string(message_index) + " on " + bag->topics()[topic].name +
-                                       ": " + what);
+    return InputError(bag->path(), "message " + std::to_string(message_index) + " on " +
+                                       bag->topics()[topic].name + ": " + what);
   }
 
   // Decodes the next message of the topic into `pending`; false at the end of the bag.
@@ -124,8 +129,7 @@ struct RosEventSource::Impl {
     const EventPacketMsg p = readEventPacket(r);
     stats.width = p.width;
     stats.height = p.height;
-    if (p.encoding != "evt3")
-      throw error("event encoding '" + p.encoding + "' is not read (evt3 is)");
+    if (p.encoding != "evt3") throw error("event encoding '" + p.encoding + "' is not read (evt3 is)");
     if (p.big_endian) throw error("big-endian evt3 payload");
     if (p.events.size() % 2 != 0) throw error("evt3 payload of an odd number of bytes");
     const std::size_t first_trigger = stats.triggers.size();
@@ -142,15 +146,16 @@ struct RosEventSource::Impl {
     }
     if (sensor_time) return;
     for (TimeNs& t : pending.t) t += stats.sensor_offset;
-    for (std::size_t i = first_trigger; i < stats.triggers.size(); ++i) stats.triggers[i].t += stats.sensor_offset;
+    for (std::size_t i = first_trigger; i < stats.triggers.size(); ++i)
+      stats.triggers[i].t += stats.sensor_offset;
   }
 
   void checkPixels(const EventArray& pending) const {
     for (std::size_t i = 0; i < pending.size(); ++i)
       if (pending.x[i] >= stats.width || pending.y[i] >= stats.height)
         throw error("event " + std::to_string(i) + " at pixel (" + std::to_string(pending.x[i]) + ", " +
-                    std::to_string(pending.y[i]) + ") outside the message's " + std::to_string(stats.width) + "x" +
-                    std::to_string(stats.height) + " sensor");
+                    std::to_string(pending.y[i]) + ") outside the message's " + std::to_string(stats.width) +
+                    "x" + std::to_string(stats.height) + " sensor");
   }
 };
 

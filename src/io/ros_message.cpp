@@ -23,7 +23,8 @@ std::string RosMessageReader::string(const char* what) {
   const ByteView s = v_.take(len, what);
   auto n = static_cast<std::size_t>(len);
   if (kind_ == RosSerialization::kCdr) {
-    if (n == 0 || s.data()[n - 1] != 0) throw v_.error(v_.pos() - len, std::string(what) + ": CDR string without its NUL");
+    if (n == 0 || s.data()[n - 1] != 0)
+      throw v_.error(v_.pos() - len, std::string(what) + ": CDR string without its NUL");
     --n;
   }
   return std::string(reinterpret_cast<const char*>(s.data()), n);
@@ -34,12 +35,14 @@ ByteView RosMessageReader::bytes(const char* what) { return v_.take(sequenceLeng
 std::uint32_t RosMessageReader::sequenceLength(std::size_t element_bytes, const char* what) {
   const std::uint32_t n = u32(what);
   if (element_bytes > 0 && static_cast<std::uint64_t>(n) * element_bytes > v_.remaining())
-    throw v_.error(v_.pos(), std::string(what) + ": " + std::to_string(n) + " elements run past the end of the message");
+    throw v_.error(
+        v_.pos(), std::string(what) + ": " + std::to_string(n) + " elements run past the end of the message");
   return n;
 }
 
 TimeNs RosMessageReader::time(const char* what) {
-  const std::int64_t sec = kind_ == RosSerialization::kRos1 ? static_cast<std::int64_t>(u32(what)) : i32(what);
+  const std::int64_t sec =
+      kind_ == RosSerialization::kRos1 ? static_cast<std::int64_t>(u32(what)) : i32(what);
   const std::uint32_t nsec = u32(what);
   if (nsec >= 1'000'000'000u) throw v_.error(v_.pos() - 4, std::string(what) + ": nanoseconds out of range");
   return sec * kNsPerSec + nsec;

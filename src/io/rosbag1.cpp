@@ -67,13 +67,14 @@ TimeNs rosTime(std::uint64_t packed) {  // sec in the low 32 bits, nsec in the h
 void decompressBz2(std::vector<std::uint8_t>& in, std::vector<std::uint8_t>& out, const std::string& file,
                    std::uint64_t offset) {
   auto n = static_cast<unsigned>(out.size());
-  const int rc = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &n,
-                                            reinterpret_cast<char*>(in.data()),
-                                            static_cast<unsigned>(in.size()), 0, 0);
+  const int rc =
+      BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &n, reinterpret_cast<char*>(in.data()),
+                                 static_cast<unsigned>(in.size()), 0, 0);
   if (rc != BZ_OK) throw errorAt(file, offset, "corrupt bz2 chunk (bzip2 error " + std::to_string(rc) + ")");
   if (n != out.size())
-    throw errorAt(file, offset, "bz2 chunk decompresses to " + std::to_string(n) + " bytes, not the " +
-                                    std::to_string(out.size()) + " its header says");
+    throw errorAt(file, offset,
+                  "bz2 chunk decompresses to " + std::to_string(n) + " bytes, not the " +
+                      std::to_string(out.size()) + " its header says");
 }
 
 }  // namespace
@@ -82,7 +83,8 @@ bool looksLikeRosBag1(const std::filesystem::path& file) {
   std::FILE* f = std::fopen(file.c_str(), "rb");
   if (!f) return false;
   char head[kMagicSize] = {};
-  const bool ok = std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
+  const bool ok =
+      std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
   std::fclose(f);
   return ok;
 }
@@ -120,7 +122,8 @@ struct RosBag1Reader::Impl {
   ByteView readRecord() {
     record_offset = file.offset();
     const auto header_len = file.readLe<std::uint32_t>("record header length");
-    if (header_len > kMaxRecordBytes) throw errorAt(file.path(), record_offset, "record header length too large");
+    if (header_len > kMaxRecordBytes)
+      throw errorAt(file.path(), record_offset, "record header length too large");
     file.readExact(header_bytes, header_len, "record header");
     const auto data_len = file.readLe<std::uint32_t>("record data length");
     if (data_len > kMaxRecordBytes) throw errorAt(file.path(), record_offset, "record data length too large");
@@ -131,8 +134,9 @@ struct RosBag1Reader::Impl {
   // Connections and chunk infos after index_pos: the topics, types and per-connection counts.
   void readIndex() {
     if (index_pos > file.size())
-      throw errorAt(file.path(), 0, "truncated: the bag's index should start at byte " + std::to_string(index_pos) +
-                                        ", past the end of the file");
+      throw errorAt(file.path(), 0,
+                    "truncated: the bag's index should start at byte " + std::to_string(index_pos) +
+                        ", past the end of the file");
     file.seek(index_pos);
     while (!file.atEnd()) {
       ByteView header = readRecord();
@@ -143,13 +147,15 @@ struct RosBag1Reader::Impl {
       } else if (op == kChunkInfo) {
         countChunkInfo();
       } else {
-        throw errorAt(file.path(), record_offset, "unexpected record (op " + std::to_string(op) + ") in the index");
+        throw errorAt(file.path(), record_offset,
+                      "unexpected record (op " + std::to_string(op) + ") in the index");
       }
     }
   }
 
   ByteView dataView() const {
-    return ByteView(data_bytes.data(), data_bytes.size(), &file.path(), record_offset + 8 + header_bytes.size());
+    return ByteView(data_bytes.data(), data_bytes.size(), &file.path(),
+                    record_offset + 8 + header_bytes.size());
   }
 
   void addConnection(const RecordHeader& h, const ByteView& header, ByteView data) {
@@ -185,7 +191,8 @@ struct RosBag1Reader::Impl {
     chunk.resize(size);
     if (compression == "none") {
       if (data_bytes.size() != size)
-        throw errorAt(file.path(), record_offset, "uncompressed chunk's data length differs from its size field");
+        throw errorAt(file.path(), record_offset,
+                      "uncompressed chunk's data length differs from its size field");
       chunk.swap(data_bytes);
     } else if (compression == "lz4") {
       lz4FrameDecompress(data_bytes.data(), data_bytes.size(), chunk, file.path(), record_offset);
@@ -205,7 +212,8 @@ struct RosBag1Reader::Impl {
 
 bool RosBag1Reader::Impl::nextInChunk(BagMessage& msg) {
   // Chunk positions are relative to its uncompressed data; errors name the chunk's own offset.
-  const std::string where = file.path() + " (chunk at byte " + std::to_string(chunk_offset) + ", uncompressed)";
+  const std::string where =
+      file.path() + " (chunk at byte " + std::to_string(chunk_offset) + ", uncompressed)";
   while (chunk_pos < chunk.size()) {
     ByteView v(chunk.data(), chunk.size(), &where, 0);
     v.seek(chunk_pos);
@@ -219,12 +227,14 @@ bool RosBag1Reader::Impl::nextInChunk(BagMessage& msg) {
     } else if (op == kMessage) {
       const auto conn = h.value<std::uint32_t>("conn", header);
       if (!by_id.count(conn))
-        throw header.error(0, "message on connection " + std::to_string(conn) + ", which the bag never defines");
+        throw header.error(0,
+                           "message on connection " + std::to_string(conn) + ", which the bag never defines");
       msg.connection = conn;
       msg.t_record = rosTime(h.value<std::uint64_t>("time", header));
       msg.index = message_index++;
       msg.file_offset = chunk_offset;
-      msg.data = ByteView(chunk.data() + (data.data() - chunk.data()), data.size(), &file.path(), chunk_offset);
+      msg.data =
+          ByteView(chunk.data() + (data.data() - chunk.data()), data.size(), &file.path(), chunk_offset);
       return true;
     } else {
       throw header.error(0, "unexpected record (op " + std::to_string(op) + ") inside a chunk");

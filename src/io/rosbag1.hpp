@@ -22,9 +22,9 @@ struct BagConnection {
 
 struct BagMessage {
   std::uint32_t connection = 0;
-  TimeNs t_record = 0;         // when the recorder received it
-  std::uint64_t index = 0;     // 0-based position among all messages of the bag
-  std::uint64_t file_offset;   // the chunk (or record) it was read from, for error messages
+  TimeNs t_record = 0;        // when the recorder received it
+  std::uint64_t index = 0;    // 0-based position among all messages of the bag
+  std::uint64_t file_offset;  // the chunk (or record) it was read from, for error messages
   ByteView data{nullptr, 0, nullptr, 0};
 };
 

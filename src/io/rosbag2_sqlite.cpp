@@ -36,8 +36,8 @@ class SqliteBag : public RosBagReader {
     const auto topic_id = sqlite3_column_int64(messages_, 0);
     const auto it = topic_index_.find(topic_id);
     if (it == topic_index_.end())
-      throw InputError(path_, "message " + std::to_string(index_) + " is on topic id " + std::to_string(topic_id) +
-                                  ", which the topics table does not hold");
+      throw InputError(path_, "message " + std::to_string(index_) + " is on topic id " +
+                                  std::to_string(topic_id) + ", which the topics table does not hold");
     msg.topic = it->second;
     msg.t_record = sqlite3_column_int64(messages_, 1);
     msg.index = index_++;
@@ -50,8 +50,8 @@ class SqliteBag : public RosBagReader {
   void rewind() override {
     sqlite3_finalize(messages_);
     messages_ = nullptr;
-    if (sqlite3_prepare_v2(db_, "SELECT topic_id, timestamp, data FROM messages ORDER BY id", -1,
-                           &messages_, nullptr) != SQLITE_OK)
+    if (sqlite3_prepare_v2(db_, "SELECT topic_id, timestamp, data FROM messages ORDER BY id", -1, &messages_,
+                           nullptr) != SQLITE_OK)
       fail("not a rosbag2 database (no messages table)");
     index_ = 0;
     done_ = false;
@@ -64,10 +64,11 @@ class SqliteBag : public RosBagReader {
 
   void readTopics() {
     sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(db_,
-                           "SELECT t.id, t.name, t.type, t.serialization_format, "
-                           "(SELECT COUNT(*) FROM messages m WHERE m.topic_id = t.id) FROM topics t ORDER BY t.id",
-                           -1, &st, nullptr) != SQLITE_OK)
+    if (sqlite3_prepare_v2(
+            db_,
+            "SELECT t.id, t.name, t.type, t.serialization_format, "
+            "(SELECT COUNT(*) FROM messages m WHERE m.topic_id = t.id) FROM topics t ORDER BY t.id",
+            -1, &st, nullptr) != SQLITE_OK)
       fail("not a rosbag2 database (no topics/messages tables)");
     int rc;
     while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
@@ -80,7 +81,8 @@ class SqliteBag : public RosBagReader {
       t.type = normalizeRosType(text(2));
       const std::string serialization = text(3);
       if (serialization != "cdr")
-        throw InputError(path_, "topic " + t.name + " uses serialization '" + serialization + "' (only cdr is read)");
+        throw InputError(
+            path_, "topic " + t.name + " uses serialization '" + serialization + "' (only cdr is read)");
       t.serialization = RosSerialization::kCdr;
       t.messages = static_cast<std::uint64_t>(sqlite3_column_int64(st, 4));
       topic_index_[sqlite3_column_int64(st, 0)] = topics_.size();

@@ -1,5 +1,6 @@
 #include "io/sequence.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include "io/line_reader.hpp"
 #include "io/prophesee.hpp"
 #include "io/ros_events.hpp"
+#include "io/ros_recording.hpp"
 #include "io/text_parse.hpp"
 
 namespace eds {
@@ -113,11 +115,13 @@ std::vector<FrameRef> readImageList(const fs::path& file) {
 
 Sequence::Sequence(const fs::path& dir, const SequenceOptions& options) : dir_(dir), options_(options) {
   std::error_code ec;
-  if (fs::is_regular_file(dir, ec) || (fs::is_directory(dir, ec) && fs::is_regular_file(dir / "metadata.yaml", ec))) {
+  if (fs::is_regular_file(dir, ec) ||
+      (fs::is_directory(dir, ec) && fs::is_regular_file(dir / "metadata.yaml", ec))) {
     openRecordingFile(dir);
     return;
   }
-  if (!fs::is_directory(dir, ec)) throw InputError(dir.string(), "sequence folder or recording file not found");
+  if (!fs::is_directory(dir, ec))
+    throw InputError(dir.string(), "sequence folder or recording file not found");
   for (const char* name : {"events.txt", "events.txt.gz", "events.h5"}) {
     if (fs::is_regular_file(dir / name, ec)) {
       events_file_ = dir / name;
@@ -177,10 +181,13 @@ CameraModel readCameraFile(const fs::path& file) {
 
 bool Sequence::hasGroundTruth() const {
   std::error_code ec;
-  return fs::is_regular_file(dir_ / "groundtruth.txt", ec);
+  return !recorded_gt_.empty() || fs::is_regular_file(dir_ / "groundtruth.txt", ec);
 }
 
 const CameraModel& Sequence::camera() const {
+  std::error_code ec;
+  if (!camera_ && fs::is_regular_file(dir_, ec))
+    throw InputError(dir_.string(), "the recording holds no calibration: give one with --calib FILE");
   if (!camera_) throw InputError((dir_ / "calib.txt").string(), "calibration file not found");
   return *camera_;
 }
@@ -226,13 +233,7 @@ void Sequence::openRecordingFile(const fs::path& file) {
     return;
   }
   if (detectRosContainer(file) != RosContainer::kNone) {
-    event_storage_ = EventStorage::kRosBag;
-    RosEventSource probe(file, options_.events_topic);
-    format_ = std::string(probe.bagFormat()) + ", events on " + probe.topic().name + " (" + probe.topic().type + ")";
-    EventArray first;
-    probe.read(first, 1);  // the sensor size is in the messages
-    width_ = static_cast<int>(probe.stats().width);
-    height_ = static_cast<int>(probe.stats().height);
+    openRosRecording(file);
     return;
   }
   if (isHdf5File(file)) {
@@ -241,9 +242,51 @@ void Sequence::openRecordingFile(const fs::path& file) {
     width_ = options_.width, height_ = options_.height;
     return;
   }
-  throw InputError(file.string(),
-                   "not a recording eds reads (AEDAT 4.0, Prophesee .raw, ROS 1 bag, rosbag2 .db3/.mcap, HDF5 events), "
-                   "nor a sequence folder");
+  throw InputError(
+      file.string(),
+      "not a recording eds reads (AEDAT 4.0, Prophesee .raw, ROS 1 bag, rosbag2 .db3/.mcap, HDF5 events), "
+      "nor a sequence folder");
+}
+
+void Sequence::openRosRecording(const fs::path& file) {
+  event_storage_ = EventStorage::kRosBag;
+  const auto bag = openRosBag(file);
+  format_ = bag->format();
+  const bool any_events = std::any_of(bag->topics().begin(), bag->topics().end(),
+                                      [](const RosTopic& t) { return isEventTopicType(t.type); });
+  if (any_events || !options_.events_topic.empty()) {
+    RosEventSource probe(file, options_.events_topic);
+    format_ += ", events on " + probe.topic().name + " (" + probe.topic().type + ")";
+    EventArray first;
+    probe.read(first, 1);  // the sensor size is in the messages
+    width_ = static_cast<int>(probe.stats().width);
+    height_ = static_cast<int>(probe.stats().height);
+  } else {
+    events_file_.clear();
+  }
+  const RosRecordingIndex idx = indexRosRecording(file, {options_.image_topic, options_.gt_topic});
+  if (!idx.image_topic.empty()) format_ += ", frames on " + idx.image_topic;
+  for (const auto& f : idx.frames) frames_.push_back({f.t, file, f.message});
+  recorded_gt_ = idx.ground_truth;
+  imu_samples_ = idx.imu;
+  if (!frames_.empty()) {
+    ros_frames_ = std::make_shared<RosFrameLoader>(file);
+    const cv::Mat first = loadFrame(0);
+    if (width_ > 0 && (first.cols != width_ || first.rows != height_))
+      throw InputError(file.string(), "frames of " + std::to_string(first.cols) + "x" +
+                                          std::to_string(first.rows) + " but events of a " +
+                                          std::to_string(width_) + "x" + std::to_string(height_) + " sensor");
+    width_ = first.cols;
+    height_ = first.rows;
+  }
+  if (idx.camera) {
+    camera_ = idx.camera;
+    if (width_ > 0 && (camera_->width != width_ || camera_->height != height_))
+      throw InputError(file.string(), "CameraInfo on " + idx.camera_info_topic + " is " +
+                                          std::to_string(camera_->width) + "x" +
+                                          std::to_string(camera_->height) + ", the sensor " +
+                                          std::to_string(width_) + "x" + std::to_string(height_));
+  }
 }
 
 fs::path Sequence::framesSource() const {
@@ -275,6 +318,7 @@ cv::Mat Sequence::loadFrame(std::size_t i) const {
   if (i >= frames_.size()) throw std::out_of_range("Sequence::loadFrame: frame index out of range");
   const std::string path = frames_[i].path.string();
   cv::Mat img = event_storage_ == EventStorage::kAedat4 ? readAedat4Frame(frames_[i].path, frames_[i].offset)
+                : ros_frames_                           ? ros_frames_->load(frames_[i].offset)
                                                         : cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (img.empty()) throw InputError(path, "cannot read image (missing or not an image)");
   if (width_ > 0 && (img.cols != width_ || img.rows != height_))
@@ -297,6 +341,8 @@ std::optional<cv::Mat> Sequence::loadDepth(std::size_t i) const {
   return metres;
 }
 
-Trajectory Sequence::groundTruth() const { return readTum(dir_ / "groundtruth.txt"); }
+Trajectory Sequence::groundTruth() const {
+  return recorded_gt_.empty() ? readTum(dir_ / "groundtruth.txt") : recorded_gt_;
+}
 
 }  // namespace eds

@@ -9,12 +9,12 @@
 // "missing" only when the requested work needs it.
 // A sequence can also be one recording file, told by its content: an AEDAT 4.0 file (events, frames,
 // IMU), a Prophesee EVT 2.0/3.0 `.raw` file, a ROS 1 bag, a rosbag2 (`.db3`, `.mcap`, or its folder)
-// or an HDF5 event file (DSEC layout). Calibration comes from --calib; frames, calibration and ground
-// truth inside bags are not read yet.
+// or an HDF5 event file (DSEC layout). Bags also give frames (sensor_msgs/Image), calibration
+// (sensor_msgs/CameraInfo) and ground truth (PoseStamped / TransformStamped); --calib overrides.
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,6 +36,8 @@ enum class EventStorage { kNone, kEcdText, kHdf5, kPropheseeRaw, kRosBag, kAedat
 
 struct SequenceOptions {
   std::string events_topic;   // bags: the topic to read events from (empty: the only event topic)
+  std::string image_topic;    // bags: the sensor_msgs/Image topic of the frames
+  std::string gt_topic;       // bags: the PoseStamped / TransformStamped topic of the ground truth
   int width = 0, height = 0;  // sensor size where the recording does not give it (.raw files)
 };
 
@@ -78,6 +80,7 @@ class Sequence {
 
  private:
   void openRecordingFile(const std::filesystem::path& file);
+  void openRosRecording(const std::filesystem::path& file);
 
   std::filesystem::path dir_;
   SequenceOptions options_;
@@ -88,6 +91,8 @@ class Sequence {
   std::optional<CameraModel> camera_;
   int width_ = 0, height_ = 0;
   std::uint64_t imu_samples_ = 0;
+  Trajectory recorded_gt_;                            // ground truth read from a recording file
+  std::shared_ptr<class RosFrameLoader> ros_frames_;  // decodes a bag's frames on demand
 };
 
 // Reads an ECD calib.txt (`fx fy cx cy [k1 k2 p1 p2 [k3]]`, radtan). The size is left at 0.

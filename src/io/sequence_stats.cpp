@@ -23,7 +23,7 @@ SequenceStats computeStats(const Sequence& seq) {
         const TimeNs t = chunk.t[i];
         if (window_start < 0 || t >= window_start + s.peak_window_ns) {
           peak = std::max(peak, in_window);
-    s.triggers = src->triggersRead();
+          s.triggers = src->triggersRead();
           window_start =
               window_start < 0 ? t : window_start + (t - window_start) / s.peak_window_ns * s.peak_window_ns;
           in_window = 0;

@@ -46,7 +46,8 @@ void feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, Time
   MergedStream stream(seq, 1 << 16, use_events);
   EventArray chunk;
   std::size_t frame = 0, next = 0;  // next: the next selected frame (index into idx)
-  for (auto kind = stream.next(chunk, frame); kind != MergedStream::Kind::kEnd; kind = stream.next(chunk, frame)) {
+  for (auto kind = stream.next(chunk, frame); kind != MergedStream::Kind::kEnd;
+       kind = stream.next(chunk, frame)) {
     if (kind == MergedStream::Kind::kFrame) {
       if (next == idx.size() || idx[next] != frame) continue;
       ++next;
@@ -66,7 +67,8 @@ void feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, Time
 OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress) {
   if (!seq.hasFrames())
     throw InputError(seq.framesSource().string(),
-                     "the odometry needs frames (keyframes come from them); " + seq.format() + " holds none");
+                     "the odometry needs frames (keyframes come from them); this " + seq.format() +
+                         " input holds none (`eds info` shows what it holds)");
   if (cfg.use_events && !seq.hasEvents())
     throw InputError((seq.dir() / "events.txt").string(),
                      "no events in the sequence: run with --frames-only, or add events");

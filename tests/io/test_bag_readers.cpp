@@ -46,17 +46,17 @@ const fs::path& writtenBags() {
   static const fs::path dir = [] {
     const fs::path out = test::tempDir("bags");
     const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py " +
-                            (test::sharedDataDir() / "esim_poster6dof_planar").string() + " " + out.string() + " " +
-                            std::to_string(kEvents) + " 2500";
+                            (test::sharedDataDir() / "esim_poster6dof_planar").string() + " " + out.string() +
+                            " " + std::to_string(kEvents) + " 2500";
     return std::system(cmd.c_str()) == 0 ? out : fs::path();
   }();
   return dir;
 }
 
-#define EDS_REQUIRE_WRITTEN_BAGS(dir)                                                            \
-  EDS_REQUIRE_SHARED(esim_, "esim_poster6dof_planar");                                           \
+#define EDS_REQUIRE_WRITTEN_BAGS(dir)                                                                     \
+  EDS_REQUIRE_SHARED(esim_, "esim_poster6dof_planar");                                                    \
   EDS_REQUIRE_AVAILABLE(pythonRosbagAvailable(), "Debian python3-rosbag, python3-roslz4, python3-genpy"); \
-  const fs::path dir = writtenBags();                                                            \
+  const fs::path dir = writtenBags();                                                                     \
   ASSERT_FALSE(dir.empty()) << "tests/tools/write_bags.py failed"
 
 std::vector<std::uint8_t> readBytes(const fs::path& file) {
@@ -65,8 +65,8 @@ std::vector<std::uint8_t> readBytes(const fs::path& file) {
 }
 
 fs::path writeBytes(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
-                                              static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   return file;
 }
 
@@ -148,7 +148,8 @@ TEST(BadRecordings, AnSqliteFileThatIsNotARosbag2IsRefused) {
   const fs::path f = test::tempDir("bad_db3") / "other.db3";
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(f.c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE notes (id INTEGER, text TEXT)", nullptr, nullptr, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE notes (id INTEGER, text TEXT)", nullptr, nullptr, nullptr),
+            SQLITE_OK);
   sqlite3_close(db);
   expectReadError([&] { readBag(f); }, f, "not a rosbag2 database");
 }
@@ -177,7 +178,8 @@ TEST(BadRecordings, DamagedEvtFilesNameTheFileAndByte) {
   auto undefined = good;
   undefined.push_back(0x1234);  // type 1 is not an EVT 3.0 word
   const fs::path f1 = writeBytes(out / "undefined.raw", raw(header, undefined));
-  expectReadError([&] { readRaw(f1); }, f1, "byte " + std::to_string(header.size() + 8) + ": word of undefined type 1");
+  expectReadError([&] { readRaw(f1); }, f1,
+                  "byte " + std::to_string(header.size() + 8) + ": word of undefined type 1");
   auto odd = raw(header, good);
   odd.push_back(0x42);
   const fs::path f2 = writeBytes(out / "odd.raw", odd);

@@ -69,7 +69,8 @@ std::vector<NpyEvent> readReferenceNpy(const std::filesystem::path& file) {
   std::uint16_t header_len;
   std::memcpy(&header_len, bytes.data() + 8, 2);
   const std::string header(bytes.data() + 10, header_len);
-  EXPECT_NE(header.find("('t', '<i8'), ('x', '<i2'), ('y', '<i2'), ('p', '|u1'), ('', '|V3')"), std::string::npos)
+  EXPECT_NE(header.find("('t', '<i8'), ('x', '<i2'), ('y', '<i2'), ('p', '|u1'), ('', '|V3')"),
+            std::string::npos)
       << header;
   const std::size_t n = std::stoul(header.substr(header.find("'shape': (") + 10));
   std::vector<NpyEvent> out(n);
@@ -155,7 +156,8 @@ PacketTotals decodePackets(const std::filesystem::path& path) {
 // and its checksum, the sum of all sensor times (events and trigger edges) in µs.
 TEST(RosBags, EventPacketBagAndDb3GiveTheReferenceCountsAndChecksum) {
   EDS_REQUIRE_SHARED(dir, "real/ros2_and_ros1_event_camera_msgs");
-  for (const auto& path : {dir / "test_events_1.bag", dir / "test_events_1" / "test_events_1.db3", dir / "test_events_1"}) {
+  for (const auto& path :
+       {dir / "test_events_1.bag", dir / "test_events_1" / "test_events_1.db3", dir / "test_events_1"}) {
     SCOPED_TRACE(path.string());
     auto bag = openRosBag(path);
     ASSERT_EQ(bag->topics().size(), 1u);
@@ -232,9 +234,18 @@ struct AedatReference {
 TEST(Aedat4, Davis346FilesReproduceTheirReferenceNumbers) {
   EDS_REQUIRE_SHARED(dir, "real/aedat4");
   const AedatReference refs[] = {
-      {"davis346_indoor.aedat4", 117667, 72363, 130, {1633953690978904, 1633953691018904, 1633953691058904}, 0.130},
-      {"davis346_street.aedat4", 6676, 3563, 160,
-       {1589163147365215, 1589163147405215, 1589163147445215, 1589163147485215}, 0.170},
+      {"davis346_indoor.aedat4",
+       117667,
+       72363,
+       130,
+       {1633953690978904, 1633953691018904, 1633953691058904},
+       0.130},
+      {"davis346_street.aedat4",
+       6676,
+       3563,
+       160,
+       {1589163147365215, 1589163147405215, 1589163147445215, 1589163147485215},
+       0.170},
   };
   for (const AedatReference& r : refs) {
     SCOPED_TRACE(r.file);

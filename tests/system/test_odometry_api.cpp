@@ -110,7 +110,9 @@ struct Recorder : OdometryListener {
     if (std::this_thread::get_id() != thread) same_thread = false;
   }
   void onInitialized(TimeNs t) override { check(), init.push_back(t); }
-  void onFramePose(const StampedPose& p, int kf) override { check(), frames.push_back(p), frame_kf.push_back(kf); }
+  void onFramePose(const StampedPose& p, int kf) override {
+    check(), frames.push_back(p), frame_kf.push_back(kf);
+  }
   void onEventPose(const StampedPose& p, int) override { check(), events.push_back(p); }
   void onKeyframe(const KeyframeUpdate& k) override { check(), keyframes.push_back(k.id); }
   void onFailure(const OdometryFailure& f) override { check(), failures.push_back(f); }
@@ -207,7 +209,8 @@ TEST(OdometryApi, LiveLoopExampleTracksEsimInRealTime) {
   const std::filesystem::path program = std::filesystem::path(EDS_BINARY_DIR) / "examples" / "live_loop";
   EDS_REQUIRE_AVAILABLE(std::filesystem::exists(program), program);
   const auto log = test::tempDir("live_loop") / "log";
-  const int rc = std::system((program.string() + " " + dir.string() + " > " + log.string() + " 2>&1").c_str());
+  const int rc =
+      std::system((program.string() + " " + dir.string() + " > " + log.string() + " 2>&1").c_str());
   EXPECT_EQ(rc, 0);
   std::istringstream lines(fileText(log));
   std::size_t event_poses = 0, keyframes = 0, init = 0, reported = 0;
@@ -249,6 +252,47 @@ TEST(OdometryApi, RefusesBadInputWithAReason) {
   CameraModel no_size = cam;
   no_size.width = no_size.height = 0;
   EXPECT_THROW(Odometry(no_size, syncConfig()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace eds
+
+namespace eds {
+namespace {
+
+// The ESIM sequence as a ROS 1 bag written by Debian's python3-rosbag (events, mono8 frames, CameraInfo,
+// PoseStamped ground truth; tests/tools/write_bags.py): the run over the bag is the run over the folder.
+TEST(RecordingRuns, EsimAsARosBagGivesByteIdenticalOutputs) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  EDS_REQUIRE_AVAILABLE(
+      std::system("/usr/bin/python3 -c 'import rosbag, genpy, roslz4, PIL' > /dev/null 2>&1") == 0,
+      "Debian python3-rosbag, python3-roslz4, python3-genpy, python3-pil");
+  const auto out = test::tempDir("recording_runs");
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py " + dir.string() +
+                          " " + out.string() + " 1000 2500 1.4";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  OdometryConfig cfg = syncConfig();
+  cfg.duration_s = 1.4;
+  const Sequence folder(dir), bag(out / "recording.bag");
+  EXPECT_EQ(bag.camera().fx, folder.camera().fx);
+  EXPECT_EQ(bag.camera().cy, folder.camera().cy);
+  ASSERT_EQ(bag.frames().size(), 36u);  // 0 .. 1.4 s at 25 Hz
+  for (std::size_t i = 0; i < bag.frames().size(); ++i) {
+    ASSERT_EQ(bag.frames()[i].t, folder.frames()[i].t);
+    ASSERT_EQ(cv::norm(bag.loadFrame(i), folder.loadFrame(i), cv::NORM_INF), 0.0) << i;
+  }
+  const Trajectory gt_bag = bag.groundTruth(), gt_folder = folder.groundTruth();
+  ASSERT_GT(gt_bag.size(), 250u);
+  for (std::size_t i = 0; i < gt_bag.size(); ++i) {
+    ASSERT_EQ(gt_bag[i].t, gt_folder[i].t);
+    ASSERT_EQ(gt_bag[i].T_w_c.matrix(), gt_folder[i].T_w_c.matrix()) << i;
+  }
+  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(bag, cfg);
+  ASSERT_TRUE(a.initialized);
+  ASSERT_GT(a.events.size(), 30u);
+  writeOdometryOutputs(out / "folder", a, cfg);
+  writeOdometryOutputs(out / "bag", b, cfg);
+  expectSameOutputs(out / "folder", out / "bag");
 }
 
 }  // namespace

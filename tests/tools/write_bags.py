@@ -1,10 +1,13 @@
 #!/usr/bin/python3
-"""Writes ROS 1 bags of dvs_msgs/EventArray (and sensor_msgs/Image) from an ECD text folder, with
-Debian's python3-rosbag and message classes that genpy generates from the message definitions.
-Test input for eds's own bag reader: the two never share code.
+"""Writes ROS 1 bags from an ECD text folder with Debian's python3-rosbag and message classes that
+genpy generates from the message definitions: test input for eds's own bag reader (the two share no
+code).
 
-usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE
-writes OUT_DIR/events_{none,bz2,lz4}.bag
+usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S]
+writes OUT_DIR/events_{none,bz2,lz4}.bag (dvs_msgs/EventArray on /dvs/events); with UNTIL_S also
+OUT_DIR/recording.bag (lz4): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
+calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
+(geometry_msgs/PoseStamped on /optitrack/davis) up to UNTIL_S seconds.
 """
 import gzip
 import sys
@@ -12,24 +15,32 @@ import sys
 import genpy.dynamic
 import rosbag
 import rospy
+from PIL import Image as PilImage
 
-HEADER = """uint32 seq
-time stamp
-string frame_id
-"""
-EVENT_ARRAY = """std_msgs/Header header
-uint32 height
-uint32 width
-Event[] events
-================================================================================
-MSG: std_msgs/Header
-""" + HEADER + """================================================================================
-MSG: dvs_msgs/Event
-uint16 x
-uint16 y
-time ts
-bool polarity
-"""
+SEP = "=" * 80 + "\n"
+HEADER = "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n"
+DEFINITIONS = {
+    "dvs_msgs/EventArray": "std_msgs/Header header\nuint32 height\nuint32 width\nEvent[] events\n" + SEP + HEADER
+    + SEP + "MSG: dvs_msgs/Event\nuint16 x\nuint16 y\ntime ts\nbool polarity\n",
+    "sensor_msgs/Image": "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n"
+    "uint8 is_bigendian\nuint32 step\nuint8[] data\n" + SEP + HEADER,
+    "sensor_msgs/CameraInfo": "std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\n"
+    "float64[] D\nfloat64[9] K\nfloat64[9] R\nfloat64[12] P\nuint32 binning_x\nuint32 binning_y\n"
+    "RegionOfInterest roi\n" + SEP + HEADER + SEP
+    + "MSG: sensor_msgs/RegionOfInterest\nuint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\n"
+    "bool do_rectify\n",
+    "geometry_msgs/PoseStamped": "std_msgs/Header header\ngeometry_msgs/Pose pose\n" + SEP + HEADER + SEP
+    + "MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n" + SEP
+    + "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n" + SEP
+    + "MSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w\n",
+}
+
+
+def classes():
+    out = {}
+    for name, text in DEFINITIONS.items():
+        out.update(genpy.dynamic.generate_dynamic(name, text))
+    return out
 
 
 def stamp(t_text):
@@ -38,26 +49,86 @@ def stamp(t_text):
     return rospy.Time(int(sec), int((frac + "000000000")[:9]))
 
 
-def main():
-    seq_dir, out_dir, max_events, per_msg = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
-    classes = genpy.dynamic.generate_dynamic("dvs_msgs/EventArray", EVENT_ARRAY)
-    EventArray, Event = classes["dvs_msgs/EventArray"], classes["dvs_msgs/Event"]
+def read_events(seq_dir, max_events, until):
+    Event = CLASSES["dvs_msgs/Event"]
     events = []
     with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
         for line in f:
-            if len(events) >= max_events:
-                break
             t, x, y, p = line.split()
+            if len(events) >= max_events or (until is not None and float(t) > until):
+                break
             events.append(Event(x=int(x), y=int(y), ts=stamp(t), polarity=p == "1"))
+    return events
+
+
+def write_events(bag, events, per_msg, width, height):
+    EventArray = CLASSES["dvs_msgs/EventArray"]
+    for seq, i in enumerate(range(0, len(events), per_msg)):
+        msg = EventArray(width=width, height=height, events=events[i:i + per_msg])
+        msg.header.seq = seq
+        msg.header.stamp = msg.events[-1].ts
+        bag.write("/dvs/events", msg, t=msg.header.stamp)
+
+
+def write_frames(bag, seq_dir, until):
+    Image = CLASSES["sensor_msgs/Image"]
+    size = None
+    with open(seq_dir + "/images.txt") as f:
+        for seq, line in enumerate(f):
+            t, path = line.split()
+            if float(t) > until:
+                break
+            img = PilImage.open(seq_dir + "/" + path).convert("L")
+            size = img.size
+            msg = Image(height=img.size[1], width=img.size[0], encoding="mono8", is_bigendian=0,
+                        step=img.size[0], data=img.tobytes())
+            msg.header.seq, msg.header.stamp, msg.header.frame_id = seq, stamp(t), "dvs"
+            bag.write("/dvs/image_raw", msg, t=msg.header.stamp)
+    return size
+
+
+def write_camera_info(bag, seq_dir, size):
+    CameraInfo = CLASSES["sensor_msgs/CameraInfo"]
+    v = [float(x) for x in open(seq_dir + "/calib.txt").read().split()]
+    fx, fy, cx, cy, d = v[0], v[1], v[2], v[3], (v[4:] + [0.0] * 5)[:5]
+    msg = CameraInfo(height=size[1], width=size[0], distortion_model="plumb_bob", D=d,
+                     K=[fx, 0, cx, 0, fy, cy, 0, 0, 1], R=[1, 0, 0, 0, 1, 0, 0, 0, 1],
+                     P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
+    bag.write("/dvs/camera_info", msg, t=rospy.Time(0, 1))
+
+
+def write_ground_truth(bag, seq_dir, until):
+    PoseStamped = CLASSES["geometry_msgs/PoseStamped"]
+    with open(seq_dir + "/groundtruth.txt") as f:
+        for line in f:
+            t, px, py, pz, qx, qy, qz, qw = line.split()
+            if float(t) > until:
+                break
+            msg = PoseStamped()
+            msg.header.stamp = stamp(t)
+            p, q = msg.pose.position, msg.pose.orientation
+            p.x, p.y, p.z = float(px), float(py), float(pz)
+            q.x, q.y, q.z, q.w = float(qx), float(qy), float(qz), float(qw)
+            bag.write("/optitrack/davis", msg, t=msg.header.stamp)
+
+
+def main():
+    seq_dir, out_dir, max_events, per_msg = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+    events = read_events(seq_dir, max_events, None)
     for compression in ("none", "bz2", "lz4"):
         with rosbag.Bag(f"{out_dir}/events_{compression}.bag", "w", compression=compression,
                         chunk_threshold=64 * 1024) as bag:
-            for seq, i in enumerate(range(0, len(events), per_msg)):
-                msg = EventArray(width=240, height=180, events=events[i:i + per_msg])
-                msg.header.seq = seq
-                msg.header.stamp = msg.events[-1].ts
-                bag.write("/dvs/events", msg, t=msg.header.stamp)
+            write_events(bag, events, per_msg, 240, 180)
+    if len(sys.argv) > 5:
+        until = float(sys.argv[5])
+        with rosbag.Bag(f"{out_dir}/recording.bag", "w", compression="lz4") as bag:
+            size = write_frames(bag, seq_dir, until)
+            write_camera_info(bag, seq_dir, size)
+            write_ground_truth(bag, seq_dir, until)
+            write_events(bag, read_events(seq_dir, 10**9, until), per_msg, size[0], size[1])
 
+
+CLASSES = classes()
 
 if __name__ == "__main__":
     main()
