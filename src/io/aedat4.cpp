@@ -52,13 +52,7 @@ std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
 }  // namespace
 
 bool looksLikeAedat4(const std::filesystem::path& file) {
-  std::FILE* f = std::fopen(file.c_str(), "rb");
-  if (!f) return false;
-  char head[kMagicSize] = {};
-  const bool ok =
-      std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
-  std::fclose(f);
-  return ok;
+  return fileStartsWith(file, std::string_view(kMagic, kMagicSize));
 }
 
 struct Aedat4Reader::Impl {

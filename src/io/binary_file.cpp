@@ -9,6 +9,15 @@ InputError errorAt(const std::string& file, std::uint64_t offset, const std::str
   return InputError(file, "byte " + std::to_string(offset) + ": " + what);
 }
 
+bool fileStartsWith(const std::filesystem::path& file, std::string_view magic) {
+  std::FILE* f = std::fopen(file.c_str(), "rb");
+  if (!f) return false;
+  std::string head(magic.size(), '\0');
+  const bool ok = std::fread(head.data(), 1, head.size(), f) == head.size() && head == magic;
+  std::fclose(f);
+  return ok;
+}
+
 BinaryFile::BinaryFile(const std::filesystem::path& path) : path_(path.string()) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path_, "file not found");

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
@@ -16,6 +17,9 @@ namespace eds {
 
 // An InputError at a byte offset of a file: "FILE: byte N: what".
 InputError errorAt(const std::string& file, std::uint64_t offset, const std::string& what);
+
+// True when the file exists and its first bytes are `magic` (telling a format by content).
+bool fileStartsWith(const std::filesystem::path& file, std::string_view magic);
 
 class BinaryFile {
  public:

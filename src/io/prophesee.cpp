@@ -122,14 +122,7 @@ void Evt2Decoder::decode(const std::uint32_t* words, std::size_t n, EventArray& 
   }
 }
 
-bool looksLikePropheseeRaw(const std::filesystem::path& file) {
-  std::FILE* f = std::fopen(file.c_str(), "rb");
-  if (!f) return false;
-  char head[2] = {0, 0};
-  const bool ok = std::fread(head, 1, 2, f) == 2 && head[0] == '%' && head[1] == ' ';
-  std::fclose(f);
-  return ok;
-}
+bool looksLikePropheseeRaw(const std::filesystem::path& file) { return fileStartsWith(file, "% "); }
 
 namespace {
 

@@ -76,14 +76,9 @@ RosContainer detectRosContainer(const std::filesystem::path& path) {
     const auto file = storageFileOf(path);
     return file.empty() ? RosContainer::kNone : detectRosContainer(file);
   }
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return RosContainer::kNone;
-  char head[16] = {};
-  const std::size_t n = std::fread(head, 1, sizeof(head), f);
-  std::fclose(f);
-  if (n >= 13 && std::memcmp(head, "#ROSBAG V2.0\n", 13) == 0) return RosContainer::kRosBag1;
-  if (n >= 16 && std::memcmp(head, "SQLite format 3", 16) == 0) return RosContainer::kSqlite;
-  if (n >= 8 && std::memcmp(head, "\x89MCAP0\r\n", 8) == 0) return RosContainer::kMcap;
+  if (looksLikeRosBag1(path)) return RosContainer::kRosBag1;
+  if (fileStartsWith(path, std::string_view("SQLite format 3", 16))) return RosContainer::kSqlite;
+  if (fileStartsWith(path, "\x89MCAP0\r\n")) return RosContainer::kMcap;
   return RosContainer::kNone;
 }
 

@@ -80,13 +80,7 @@ void decompressBz2(std::vector<std::uint8_t>& in, std::vector<std::uint8_t>& out
 }  // namespace
 
 bool looksLikeRosBag1(const std::filesystem::path& file) {
-  std::FILE* f = std::fopen(file.c_str(), "rb");
-  if (!f) return false;
-  char head[kMagicSize] = {};
-  const bool ok =
-      std::fread(head, 1, kMagicSize, f) == kMagicSize && std::memcmp(head, kMagic, kMagicSize) == 0;
-  std::fclose(f);
-  return ok;
+  return fileStartsWith(file, std::string_view(kMagic, kMagicSize));
 }
 
 struct RosBag1Reader::Impl {

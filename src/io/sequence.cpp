@@ -195,13 +195,7 @@ const CameraModel& Sequence::camera() const {
 namespace {
 
 bool isHdf5File(const fs::path& file) {
-  static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-  std::FILE* f = std::fopen(file.c_str(), "rb");
-  if (!f) return false;
-  char head[8] = {};
-  const bool ok = std::fread(head, 1, 8, f) == 8 && std::memcmp(head, kSignature, 8) == 0;
-  std::fclose(f);
-  return ok;
+  return fileStartsWith(file, std::string_view("\x89HDF\r\n\x1a\n", 8));
 }
 
 }  // namespace
