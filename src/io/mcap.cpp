@@ -136,7 +136,8 @@ class McapBag : public RosBagReader {
                       "message on channel " + std::to_string(channel) + ", which is not defined before it");
       msg.topic = it->second;
       msg.index = index_++;
-      msg.data = v.take(v.remaining(), "message data");
+      const ByteView data = v.take(v.remaining(), "message data");
+      msg.data = messageView(data.data(), data.size(), where_, file_.path(), msg.index);
       return true;
     }
     return false;
@@ -203,7 +204,7 @@ class McapBag : public RosBagReader {
   std::unordered_map<std::uint16_t, std::size_t> channel_topic_;
   std::unordered_map<std::uint16_t, std::uint64_t> channel_counts_;
   std::vector<std::uint8_t> record_, chunk_data_;
-  std::string chunk_where_;
+  std::string chunk_where_, where_;
   ByteView chunk_{nullptr, 0, nullptr, 0};
   std::uint8_t op_ = 0;
   bool in_chunk_ = false, done_ = false;

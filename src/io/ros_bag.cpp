@@ -27,7 +27,7 @@ class RosBag1Topics : public RosBagReader {
     msg.topic = topic_of_.at(m.connection);
     msg.t_record = m.t_record;
     msg.index = m.index;
-    msg.data = m.data;
+    msg.data = messageView(m.data.data(), m.data.size(), where_, bag_.path(), m.index);
     return true;
   }
 
@@ -48,6 +48,7 @@ class RosBag1Topics : public RosBagReader {
   }
 
   RosBag1Reader bag_;
+  std::string where_;
   std::vector<RosTopic> topics_;
   std::unordered_map<std::uint32_t, std::size_t> topic_of_;
   std::size_t known_connections_ = 0;

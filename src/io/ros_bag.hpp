@@ -39,6 +39,14 @@ class RosBagReader {
   virtual void rewind() = 0;
 };
 
+// A message's bytes, named "FILE, message N" (in `where`, which must outlive the view) so that an
+// error while decoding it points at the message.
+inline ByteView messageView(const std::uint8_t* data, std::size_t size, std::string& where,
+                            const std::string& path, std::uint64_t index) {
+  where = path + ", message " + std::to_string(index);
+  return ByteView(data, size, &where, 0);
+}
+
 enum class RosContainer { kNone, kRosBag1, kSqlite, kMcap };
 // What a file is, by its first bytes; a folder is looked into for its storage file.
 RosContainer detectRosContainer(const std::filesystem::path& path);

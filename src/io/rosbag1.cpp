@@ -108,7 +108,10 @@ struct RosBag1Reader::Impl {
       throw errorAt(file.path(), record_offset, "the first record is not a bag header");
     index_pos = h.value<std::uint64_t>("index_pos", header);
     data_start = file.offset();
-    if (index_pos != 0) readIndex();
+    if (index_pos != 0)
+      readIndex();
+    else
+      scanUnindexed();
     file.seek(data_start);
   }
 
@@ -123,6 +126,17 @@ struct RosBag1Reader::Impl {
     if (data_len > kMaxRecordBytes) throw errorAt(file.path(), record_offset, "record data length too large");
     file.readExact(data_bytes, data_len, "record data");
     return ByteView(header_bytes.data(), header_bytes.size(), &file.path(), record_offset + 4);
+  }
+
+  // A bag whose recorder stopped before writing the index: its connections and counts come from one
+  // pass over the chunks (as `rosbag reindex` would find them).
+  void scanUnindexed() {
+    std::unordered_map<std::uint32_t, std::uint64_t> counts;
+    BagMessage m;
+    while (next(m)) ++counts[m.connection];
+    for (auto& c : connections) c.messages = counts[c.id];
+    in_chunk = false;
+    message_index = 0;
   }
 
   // Connections and chunk infos after index_pos: the topics, types and per-connection counts.

@@ -43,7 +43,7 @@ class SqliteBag : public RosBagReader {
     msg.index = index_++;
     const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(messages_, 2));
     const auto size = static_cast<std::size_t>(sqlite3_column_bytes(messages_, 2));
-    msg.data = ByteView(blob, size, &path_, 0);
+    msg.data = messageView(blob, size, where_, path_, msg.index);
     return true;
   }
 
@@ -92,7 +92,7 @@ class SqliteBag : public RosBagReader {
     if (rc != SQLITE_DONE) fail("reading the topics table");
   }
 
-  std::string path_;
+  std::string path_, where_;
   sqlite3* db_ = nullptr;
   sqlite3_stmt* messages_ = nullptr;
   std::vector<RosTopic> topics_;

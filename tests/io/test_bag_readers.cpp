@@ -242,3 +242,146 @@ TEST(BadRecordings, AFileOfNoKnownFormatIsNotASequence) {
 
 }  // namespace
 }  // namespace eds
+
+namespace eds {
+namespace {
+
+// A copy of the real rosbag2 SQLite file with one SQL change applied.
+fs::path editedDb3(const fs::path& dir, const std::string& name, const std::string& sql) {
+  const fs::path f = dir / (name + ".db3");
+  fs::copy_file(
+      test::sharedDataDir() / "real/ros2_and_ros1_event_camera_msgs/test_events_1/test_events_1.db3", f,
+      fs::copy_options::overwrite_existing);
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(f.c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sql;
+  sqlite3_close(db);
+  return f;
+}
+
+TEST(BadRecordings, DamagedRosbag2FilesNameTheMessage) {
+  EDS_REQUIRE_SHARED(real, "real/ros2_and_ros1_event_camera_msgs/test_events_1/test_events_1.db3");
+  const fs::path out = test::tempDir("bad_rosbag2");
+  const fs::path topic = editedDb3(out, "topic", "UPDATE messages SET topic_id = 7 WHERE id = 3");
+  expectReadError([&] { readBag(topic); }, topic,
+                  "message 2 is on topic id 7, which the topics table does not hold");
+  const fs::path json = editedDb3(out, "json", "UPDATE topics SET serialization_format = 'json'");
+  expectReadError([&] { readBag(json); }, json, "uses serialization 'json' (only cdr is read)");
+  const fs::path big =
+      editedDb3(out, "big", "UPDATE messages SET data = X'0000' || substr(data, 3) WHERE id = 1");
+  expectReadError([&] { readBag(big); }, big, "not little-endian CDR");
+  const fs::path cut = editedDb3(out, "cut", "UPDATE messages SET data = substr(data, 1, 60) WHERE id = 2");
+  expectReadError([&] { readBag(cut); }, cut, "cut.db3, message 1: byte 56: encoding: length past the end");
+  const fs::path evt4 = editedDb3(out, "evt4",
+                                  "UPDATE messages SET data = replace(data, CAST('evt3' AS BLOB), "
+                                  "CAST('evt4' AS BLOB)) WHERE id = 1");
+  expectReadError([&] { readBag(evt4); }, evt4,
+                  "message 0 on /event_camera/events: event encoding 'evt4' is not read");
+  const fs::path type = editedDb3(out, "type", "UPDATE topics SET type = 'std_msgs/msg/String'");
+  expectReadError([&] { readBag(type); }, type, "no event topic");
+  expectReadError([&] { readBag(real, "/event_camera/events_left"); }, real,
+                  "no topic /event_camera/events_left");
+}
+
+TEST(BadRecordings, DamagedMcapFilesNameTheFileAndByte) {
+  EDS_REQUIRE_SHARED(file, "real/ros2_and_ros1_event_camera_msgs/test_events_2/test_events_2_0.mcap");
+  const fs::path out = test::tempDir("bad_mcap");
+  const auto bytes = readBytes(file);
+  auto cut = bytes;
+  cut.resize(400000);  // inside the first chunk (bytes 555..808146)
+  const auto readAllMessages = [](const fs::path& f) {
+    auto bag = openRosBag(f);
+    RosMessage m;
+    while (bag->next(m)) {
+    }
+  };
+  expectReadError([&] { readAllMessages(writeBytes(out / "cut.mcap", cut)); }, out / "cut.mcap",
+                  "byte 555: record length 807582 runs past the end of the file");
+  auto length = bytes;
+  length[556 + 7] = 0x10;  // the first chunk's length becomes huge
+  expectReadError([&] { readAllMessages(writeBytes(out / "length.mcap", length)); }, out / "length.mcap",
+                  "byte 555: record length");
+  auto magic = bytes;
+  magic[1] = 'N';
+  expectReadError([&] { readAllMessages(writeBytes(out / "magic.mcap", magic)); }, out / "magic.mcap",
+                  "not a ROS bag");
+}
+
+TEST(BadRecordings, DamagedFramesCalibrationAndPosesInABagNameTheMessage) {
+  EDS_REQUIRE_WRITTEN_BAGS(dir);
+  const fs::path out = test::tempDir("bad_frames");
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py " +
+                          (test::sharedDataDir() / "esim_poster6dof_planar").string() + " " + out.string() +
+                          " 1000 2500 0.2 none";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const auto bytes = readBytes(out / "recording.bag");
+  const auto edited = [&](const std::string& name, const std::string& from, const std::string& to) {
+    auto b = bytes;
+    const auto at = std::search(b.begin(), b.end(), from.begin(), from.end());
+    EXPECT_NE(at, b.end()) << from;
+    std::copy(to.begin(), to.end(), at);
+    return writeBytes(out / name, b);
+  };
+  const fs::path yuv = edited("yuv.bag", "mono8", "yuv42");
+  expectReadError([&] { Sequence s(yuv); }, yuv, "image encoding 'yuv42' is not read");
+  const fs::path model = edited("model.bag", "plumb_bob", "fisheye_x");
+  expectReadError([&] { Sequence s(model); }, model, "distortion model 'fisheye_x' is not supported");
+  // Frames without events, and events without frames: what eds run needs is named.
+  const Sequence events_only(dir / "events_none.bag");
+  EXPECT_FALSE(events_only.hasFrames());
+  EXPECT_TRUE(events_only.hasEvents());
+  expectReadError([&] { Sequence(dir / "events_none.bag").camera(); }, dir / "events_none.bag",
+                  "holds no calibration: give one with --calib FILE");
+}
+
+TEST(BadRecordings, MoreDamagedAedat4AndEvtFiles) {
+  EDS_REQUIRE_SHARED(aedat, "real/aedat4/davis346_street.aedat4");
+  const fs::path out = test::tempDir("bad_more");
+  auto bytes = readBytes(aedat);
+  std::int32_t header_size;
+  std::memcpy(&header_size, bytes.data() + 14, 4);
+  const std::size_t first = 18 + static_cast<std::size_t>(header_size);  // an EVTS packet on stream 0
+  bytes[first] = 3;                                                      // stream 3 carries TRIG
+  const fs::path type = writeBytes(out / "type.aedat4", bytes);
+  expectReadError([&] { readAedat(type); }, type,
+                  "packet of type 'EVTS' on stream 3, which the header says carries TRIG");
+  auto header = readBytes(aedat);
+  header.resize(200);
+  const fs::path short_header = writeBytes(out / "header.aedat4", header);
+  expectReadError([&] { readAedat(short_header); }, short_header, "runs past the end of the file");
+  // EVT 2.0: a word of type 5 is not defined.
+  const std::string head = "% evt 2.0\n% geometry 64x48\n";
+  std::vector<std::uint8_t> evt2(head.begin(), head.end());
+  for (std::uint32_t w : {0x80000001u, 0x10000803u, 0x50000000u}) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&w);
+    evt2.insert(evt2.end(), p, p + 4);
+  }
+  const fs::path f = writeBytes(out / "evt2.raw", evt2);
+  expectReadError([&] { readRaw(f); }, f,
+                  "byte " + std::to_string(head.size() + 8) + ": word of undefined type 5");
+}
+
+TEST(BadRecordings, UnknownChunkCompressionAndAnUnindexedBag) {
+  EDS_REQUIRE_WRITTEN_BAGS(dir);
+  const fs::path out = test::tempDir("bag_header");
+  auto lz4 = readBytes(dir / "events_lz4.bag");
+  const std::string field = "compression=lz4";
+  std::replace_if(
+      std::search(lz4.begin(), lz4.end(), field.begin(), field.end()) + 14,
+      std::search(lz4.begin(), lz4.end(), field.begin(), field.end()) + 15, [](auto) { return true; }, '5');
+  const fs::path lz5 = writeBytes(out / "lz5.bag", lz4);
+  expectReadError([&] { readBag(lz5); }, lz5, "unknown chunk compression 'lz5'");
+  // A bag whose recorder died before writing its index (index_pos 0) is read from its chunks alone.
+  auto plain = readBytes(dir / "events_none.bag");
+  const std::string index_field = "index_pos=";
+  const auto at = std::search(plain.begin(), plain.end(), index_field.begin(), index_field.end());
+  std::fill(at + 10, at + 18, 0);
+  const fs::path unindexed = writeBytes(out / "unindexed.bag", plain);
+  RosEventSource a(unindexed), b(dir / "events_none.bag");
+  const EventArray ea = readAll(a), eb = readAll(b);
+  EXPECT_EQ(ea.size(), kEvents);
+  EXPECT_EQ(ea.t, eb.t);
+}
+
+}  // namespace
+}  // namespace eds

@@ -3,9 +3,9 @@
 genpy generates from the message definitions: test input for eds's own bag reader (the two share no
 code).
 
-usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S]
+usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S [COMPRESSION]]
 writes OUT_DIR/events_{none,bz2,lz4}.bag (dvs_msgs/EventArray on /dvs/events); with UNTIL_S also
-OUT_DIR/recording.bag (lz4): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
+OUT_DIR/recording.bag (lz4 unless COMPRESSION says otherwise): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
 calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
 (geometry_msgs/PoseStamped on /optitrack/davis) up to UNTIL_S seconds.
 """
@@ -121,7 +121,8 @@ def main():
             write_events(bag, events, per_msg, 240, 180)
     if len(sys.argv) > 5:
         until = float(sys.argv[5])
-        with rosbag.Bag(f"{out_dir}/recording.bag", "w", compression="lz4") as bag:
+        compression = sys.argv[6] if len(sys.argv) > 6 else "lz4"
+        with rosbag.Bag(f"{out_dir}/recording.bag", "w", compression=compression) as bag:
             size = write_frames(bag, seq_dir, until)
             write_camera_info(bag, seq_dir, size)
             write_ground_truth(bag, seq_dir, until)
