@@ -62,6 +62,7 @@ void Evt3Decoder::timeLow(std::uint16_t w) {
 void Evt3Decoder::decode(const std::uint16_t* words, std::size_t n, EventArray& cd,
                          std::vector<TriggerEvent>& triggers) {
   const auto now = [&] { return static_cast<TimeNs>(((time_high_ << 12) | time_low_) * kNsPerUs); };
+  cd.reserve(cd.size() + n);  // about one event per word: the vectors grow once, not per event
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint16_t w = words[i];
     const unsigned type = w >> 12;
