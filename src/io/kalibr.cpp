@@ -172,6 +172,27 @@ KalibrCamera readKalibrCamera(const std::string& path, const std::string& camera
   return CameraParser(path, camera).parse(node);
 }
 
+KalibrCamera readDsecCamera(const std::string& path, const std::string& camera) {
+  const YAML::Node root = loadFile(path);
+  const YAML::Node intrinsics = root["intrinsics"];
+  if (!intrinsics || !intrinsics.IsMap()) throw InputError(path, "not a DSEC cam_to_cam.yaml (no intrinsics map)");
+  const YAML::Node node = intrinsics[camera];
+  if (!node) throw InputError(path, "no camera '" + camera + "' under intrinsics");
+  // DSEC names Kalibr's `intrinsics` list `camera_matrix`; the rest is Kalibr's.
+  YAML::Node kalibr = YAML::Clone(node);
+  if (kalibr["camera_matrix"]) kalibr["intrinsics"] = kalibr["camera_matrix"];
+  return CameraParser(path, camera).parse(kalibr);
+}
+
+bool isDsecCamToCam(const std::string& path) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    return root.IsMap() && root["intrinsics"] && root["intrinsics"].IsMap();
+  } catch (const YAML::Exception&) {
+    return false;
+  }
+}
+
 std::vector<KalibrCamera> readKalibrCamchain(const std::string& path) {
   const YAML::Node root = loadFile(path);
   std::vector<KalibrCamera> cams;

@@ -24,6 +24,12 @@ struct KalibrCamera {
 // problem is, for a missing file, malformed YAML, missing keys or bad values.
 KalibrCamera readKalibrCamera(const std::string& path, const std::string& camera = "cam0");
 
+// Reads one camera of a DSEC cam_to_cam.yaml (`intrinsics: {cam0: {camera_matrix: [fx, fy, cx, cy],
+// distortion_model, distortion_coeffs, resolution}, camRect0: ...}`); cam0 is the left event camera.
+KalibrCamera readDsecCamera(const std::string& path, const std::string& camera = "cam0");
+// True when the YAML file has DSEC's top-level `intrinsics` map (not a Kalibr camchain).
+bool isDsecCamToCam(const std::string& path);
+
 // Reads every camN entry (cam0, cam1, ... in order).
 std::vector<KalibrCamera> readKalibrCamchain(const std::string& path);
 

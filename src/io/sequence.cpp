@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
@@ -174,9 +176,46 @@ void Sequence::setCamera(const CameraModel& camera, const std::string& source) {
 
 CameraModel readCameraFile(const fs::path& file) {
   const std::string ext = file.extension().string();
-  if (ext == ".yaml" || ext == ".yml")
-    return cameraFromKalibr(readKalibrCamera(file.string()), file.string());
+  if (ext == ".json") return readBasaltCalibration(file);
+  if ((ext == ".yaml" || ext == ".yml") && isDsecCamToCam(file.string()))
+    return cameraFromKalibr(readDsecCamera(file.string()), file.string());
+  if (ext == ".yaml" || ext == ".yml") return cameraFromKalibr(readKalibrCamera(file.string()), file.string());
   return readEcdCalib(file);
+}
+
+CameraModel readBasaltCalibration(const fs::path& file, std::size_t camera) {
+  const std::string name = file.string();
+  std::ifstream in(file);
+  if (!in) throw InputError(name, "file not found");
+  nlohmann::json root;
+  try {
+    root = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(name, std::string("malformed JSON: ") + e.what());
+  }
+  try {
+    const nlohmann::json& v = root.contains("value0") ? root.at("value0") : root;
+    const nlohmann::json& cam = v.at("intrinsics").at(camera);
+    const std::string type = cam.at("camera_type").get<std::string>();
+    const nlohmann::json& k = cam.at("intrinsics");
+    CameraModel c;
+    c.fx = k.at("fx").get<double>(), c.fy = k.at("fy").get<double>();
+    c.cx = k.at("cx").get<double>(), c.cy = k.at("cy").get<double>();
+    if (type == "kb4") {  // Kannala-Brandt with k1..k4: the equidistant model
+      c.distortion = Distortion::kEquidistant;
+      for (int i = 0; i < 4; ++i) c.k[i] = k.at("k" + std::to_string(i + 1)).get<double>();
+    } else if (type != "pinhole") {
+      throw InputError(name, "camera_type '" + type + "' is not supported (kb4 and pinhole are)");
+    }
+    const nlohmann::json& res = v.at("resolution").at(camera);
+    c.width = res.at(0).get<int>(), c.height = res.at(1).get<int>();
+    c.validate(name);
+    return c;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(name, std::string("not a Basalt calibration (value0.intrinsics, value0.resolution): ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw InputError(name, e.what());
+  }
 }
 
 bool Sequence::hasGroundTruth() const {

@@ -100,9 +100,12 @@ CameraModel readEcdCalib(const std::filesystem::path& file);
 struct KalibrCamera;
 // Converts a Kalibr camera to a CameraModel; InputError naming `source` if unsupported or invalid.
 CameraModel cameraFromKalibr(const KalibrCamera& k, const std::string& source);
-// Reads a calibration file: a Kalibr camchain if it ends in .yaml/.yml, else an ECD calib.txt line
-// (size 0: the sequence gives it).
+// Reads a calibration file: a Basalt / TUM-VIE JSON (.json; kb4 becomes the equidistant model), a
+// DSEC cam_to_cam.yaml (its cam0) or a Kalibr camchain (.yaml/.yml), else an ECD calib.txt line (size
+// 0: the sequence gives it).
 CameraModel readCameraFile(const std::filesystem::path& file);
+// Reads camera `camera` of a Basalt calibration JSON (TUM-VIE's calibration files).
+CameraModel readBasaltCalibration(const std::filesystem::path& file, std::size_t camera = 0);
 // Reads images.txt (`t images/frame_X.png`); paths relative to the file's folder, checked to exist.
 std::vector<FrameRef> readImageList(const std::filesystem::path& file);
 
