@@ -35,7 +35,7 @@ class McapBag : public RosBagReader {
     std::uint8_t magic[8];
     file_.readExact(magic, 8, "MCAP magic");
     if (std::memcmp(magic, kMagic, 8) != 0) throw errorAt(file_.path(), 0, "not an MCAP file (bad magic)");
-    readSummary();
+    if (!readSummary()) scanChannels();
     rewind();
   }
 
@@ -164,12 +164,25 @@ class McapBag : public RosBagReader {
     topics_.push_back(std::move(t));
   }
 
-  // The footer points at the summary: schemas, channels and statistics (message counts per channel).
-  void readSummary() {
-    if (file_.size() < 8 + 9 + 20 + 8) return;
+  // A file without a summary (a recorder that stopped early): its channels and counts come from one
+  // pass over the records.
+  void scanChannels() {
+    rewind();
+    RosMessage m;
+    std::vector<std::uint64_t> counts;
+    while (next(m)) {
+      counts.resize(std::max(counts.size(), m.topic + 1));
+      ++counts[m.topic];
+    }
+    for (std::size_t i = 0; i < counts.size(); ++i) topics_[i].messages = counts[i];
+  }
+
+  // The footer points at the summary: schemas, channels and statistics. False when there is none.
+  bool readSummary() {
+    if (file_.size() < 8 + 9 + 20 + 8) return false;
     file_.seek(file_.size() - 8 - 20);
     const auto summary_start = file_.readLe<std::uint64_t>("footer summary start");
-    if (summary_start == 0 || summary_start >= file_.size()) return;
+    if (summary_start == 0 || summary_start >= file_.size()) return false;
     file_.seek(summary_start);
     std::vector<std::uint8_t> summary;
     file_.readExact(summary, static_cast<std::size_t>(file_.size() - 8 - 29 - summary_start),
@@ -187,6 +200,7 @@ class McapBag : public RosBagReader {
       op_ = op;
       if (op == kSchema || op == kChannel) handle(r, unused);
     }
+    return true;
   }
 
   void readStatistics(ByteView v) {

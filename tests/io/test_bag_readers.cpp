@@ -385,3 +385,99 @@ TEST(BadRecordings, UnknownChunkCompressionAndAnUnindexedBag) {
 
 }  // namespace
 }  // namespace eds
+
+namespace eds {
+namespace {
+
+// The real MCAP file with every chunk recompressed by Debian's `zstd` or `lz4` program (the frame
+// formats MCAP names) and no summary section: the same messages must come out, byte for byte.
+fs::path recompressedMcap(const fs::path& source, const fs::path& dir, const std::string& tool) {
+  const auto in = readBytes(source);
+  std::vector<std::uint8_t> out(in.begin(), in.begin() + 8);
+  const auto put = [&](const void* p, std::size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    out.insert(out.end(), b, b + n);
+  };
+  std::size_t pos = 8;
+  while (pos + 9 <= in.size()) {
+    const std::uint8_t op = in[pos];
+    std::uint64_t len;
+    std::memcpy(&len, &in[pos + 1], 8);
+    const std::uint8_t* body = &in[pos + 9];
+    pos += 9 + len;
+    if (op == 0x0F) break;  // data end: the summary after it is left out
+    if (op != 0x06) {
+      out.insert(out.end(), body - 9, body + len);
+      continue;
+    }
+    // Chunk: start, end, uncompressed size, crc, compression (string), records (u64 length + bytes).
+    std::uint32_t comp_len;
+    std::memcpy(&comp_len, body + 28, 4);
+    const std::size_t records_at = 32 + comp_len + 8;
+    writeBytes(dir / "records", std::vector<std::uint8_t>(body + records_at, body + len));
+    const std::string cmd =
+        tool + " -q -f -c " + (dir / "records").string() + " > " + (dir / "packed").string();
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const auto packed = readBytes(dir / "packed");
+    const std::string name = tool == "zstd" ? "zstd" : "lz4";
+    const std::uint32_t name_len = static_cast<std::uint32_t>(name.size());
+    const std::uint64_t packed_len = packed.size(), new_len = 28 + 4 + name.size() + 8 + packed.size();
+    out.push_back(0x06);
+    put(&new_len, 8);
+    put(body, 28);  // times, uncompressed size and crc unchanged
+    put(&name_len, 4);
+    put(name.data(), name.size());
+    put(&packed_len, 8);
+    put(packed.data(), packed.size());
+  }
+  const std::uint8_t data_end[] = {0x0F, 4, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  put(data_end, sizeof(data_end));
+  const std::uint8_t footer_head[] = {0x02, 20, 0, 0, 0, 0, 0, 0, 0};
+  put(footer_head, sizeof(footer_head));
+  out.insert(out.end(), 20, 0);  // no summary
+  out.insert(out.end(), in.begin(), in.begin() + 8);
+  return writeBytes(dir / ("recompressed_" + tool + ".mcap"), out);
+}
+
+TEST(Mcap, ChunksCompressedByZstdAndLz4ProgramsGiveTheSameMessages) {
+  EDS_REQUIRE_SHARED(file, "real/ros2_and_ros1_event_camera_msgs/test_events_2/test_events_2_0.mcap");
+  EDS_REQUIRE_AVAILABLE(std::system("zstd --version > /dev/null 2>&1 && lz4 --version > /dev/null 2>&1") == 0,
+                        "Debian zstd and lz4 programs");
+  const fs::path dir = test::tempDir("mcap_recompressed");
+  struct Msg {
+    std::string topic;
+    TimeNs t;
+    std::vector<std::uint8_t> data;
+  };
+  const auto messages = [](const fs::path& f) {
+    auto bag = openRosBag(f);
+    std::vector<Msg> all;
+    RosMessage m;
+    while (bag->next(m))
+      all.push_back(
+          {bag->topics()[m.topic].name, m.t_record, {m.data.data(), m.data.data() + m.data.size()}});
+    EXPECT_EQ(bag->topics().size(), 1u);
+    EXPECT_EQ(bag->topics().at(0).messages, 100u);  // counted by a pass when there is no summary
+    return all;
+  };
+  const std::vector<Msg> original = messages(file);
+  ASSERT_EQ(original.size(), 100u);
+  for (const std::string tool : {"zstd", "lz4"}) {
+    SCOPED_TRACE(tool);
+    const std::vector<Msg> got = messages(recompressedMcap(file, dir, tool));
+    ASSERT_EQ(got.size(), original.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(got[i].topic, original[i].topic);
+      ASSERT_EQ(got[i].t, original[i].t);
+      ASSERT_TRUE(got[i].data == original[i].data) << i;
+    }
+    // The same file with bytes of its first compressed chunk overwritten.
+    auto bytes = readBytes(dir / ("recompressed_" + tool + ".mcap"));
+    for (std::size_t i = 700; i < 760; ++i) bytes[i] ^= 0x3C;  // the first chunk starts at byte 555
+    const fs::path corrupt = writeBytes(dir / ("corrupt_" + tool + ".mcap"), bytes);
+    expectReadError([&] { messages(corrupt); }, corrupt, "corrupt " + tool + " block");
+  }
+}
+
+}  // namespace
+}  // namespace eds
