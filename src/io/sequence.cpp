@@ -15,6 +15,7 @@
 #include "io/aedat4.hpp"
 #include "io/ecd_events.hpp"
 #include "io/hdf5_events.hpp"
+#include "io/hdf5_mvsec.hpp"
 #include "io/kalibr.hpp"
 #include "io/line_reader.hpp"
 #include "io/prophesee.hpp"
@@ -179,7 +180,8 @@ CameraModel readCameraFile(const fs::path& file) {
   if (ext == ".json") return readBasaltCalibration(file);
   if ((ext == ".yaml" || ext == ".yml") && isDsecCamToCam(file.string()))
     return cameraFromKalibr(readDsecCamera(file.string()), file.string());
-  if (ext == ".yaml" || ext == ".yml") return cameraFromKalibr(readKalibrCamera(file.string()), file.string());
+  if (ext == ".yaml" || ext == ".yml")
+    return cameraFromKalibr(readKalibrCamera(file.string()), file.string());
   return readEcdCalib(file);
 }
 
@@ -212,7 +214,8 @@ CameraModel readBasaltCalibration(const fs::path& file, std::size_t camera) {
     c.validate(name);
     return c;
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(name, std::string("not a Basalt calibration (value0.intrinsics, value0.resolution): ") + e.what());
+    throw InputError(
+        name, std::string("not a Basalt calibration (value0.intrinsics, value0.resolution): ") + e.what());
   } catch (const std::invalid_argument& e) {
     throw InputError(name, e.what());
   }
@@ -267,6 +270,15 @@ void Sequence::openRecordingFile(const fs::path& file) {
   }
   if (detectRosContainer(file) != RosContainer::kNone) {
     openRosRecording(file);
+    return;
+  }
+  if (isHdf5File(file) && isMvsecFile(file)) {
+    event_storage_ = EventStorage::kHdf5Mvsec;
+    format_ = "MVSEC HDF5 (davis/left)";
+    const MvsecFrames frames = readMvsecFrameIndex(file);
+    for (std::size_t i = 0; i < frames.t.size(); ++i) frames_.push_back({frames.t[i], file, i});
+    width_ = frames.width > 0 ? frames.width : options_.width;
+    height_ = frames.height > 0 ? frames.height : options_.height;
     return;
   }
   if (isHdf5File(file)) {
@@ -335,6 +347,8 @@ std::unique_ptr<EventSource> Sequence::openEvents() const {
   if (event_storage_ == EventStorage::kRosBag)
     return std::make_unique<RosEventSource>(events_file_, options_.events_topic);
   if (event_storage_ == EventStorage::kAedat4) return std::make_unique<Aedat4EventSource>(events_file_);
+  if (event_storage_ == EventStorage::kHdf5Mvsec)
+    return std::make_unique<MvsecEventSource>(events_file_, width_, height_);
   if (event_storage_ == EventStorage::kHdf5) {
     Hdf5EventOptions opts;
     opts.width = width_;
@@ -351,8 +365,10 @@ cv::Mat Sequence::loadFrame(std::size_t i) const {
   if (i >= frames_.size()) throw std::out_of_range("Sequence::loadFrame: frame index out of range");
   const std::string path = frames_[i].path.string();
   cv::Mat img = event_storage_ == EventStorage::kAedat4 ? readAedat4Frame(frames_[i].path, frames_[i].offset)
-                : ros_frames_                           ? ros_frames_->load(frames_[i].offset)
-                                                        : cv::imread(path, cv::IMREAD_GRAYSCALE);
+                : event_storage_ == EventStorage::kHdf5Mvsec
+                    ? readMvsecFrame(frames_[i].path, frames_[i].offset)
+                : ros_frames_ ? ros_frames_->load(frames_[i].offset)
+                              : cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (img.empty()) throw InputError(path, "cannot read image (missing or not an image)");
   if (width_ > 0 && (img.cols != width_ || img.rows != height_))
     throw InputError(path, "image size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +

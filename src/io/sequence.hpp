@@ -9,8 +9,9 @@
 // "missing" only when the requested work needs it.
 // A sequence can also be one recording file, told by its content: an AEDAT 4.0 file (events, frames,
 // IMU), a Prophesee EVT 2.0/3.0 `.raw` file, a ROS 1 bag, a rosbag2 (`.db3`, `.mcap`, or its folder)
-// or an HDF5 event file (DSEC layout). Bags also give frames (sensor_msgs/Image), calibration
-// (sensor_msgs/CameraInfo) and ground truth (PoseStamped / TransformStamped); --calib overrides.
+// an HDF5 event file (DSEC / TUM-VIE layout) or an MVSEC HDF5 file (events and frames). Bags also give frames
+// (sensor_msgs/Image), calibration (sensor_msgs/CameraInfo) and ground truth (PoseStamped /
+// TransformStamped); --calib overrides.
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -32,7 +33,7 @@ struct FrameRef {
 };
 
 // How the events of a sequence are stored.
-enum class EventStorage { kNone, kEcdText, kHdf5, kPropheseeRaw, kRosBag, kAedat4 };
+enum class EventStorage { kNone, kEcdText, kHdf5, kHdf5Mvsec, kPropheseeRaw, kRosBag, kAedat4 };
 
 struct SequenceOptions {
   std::string events_topic;   // bags: the topic to read events from (empty: the only event topic)

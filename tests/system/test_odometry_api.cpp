@@ -295,5 +295,33 @@ TEST(RecordingRuns, EsimAsARosBagGivesByteIdenticalOutputs) {
   expectSameOutputs(out / "folder", out / "bag");
 }
 
+// The ESIM sequence in MVSEC's HDF5 layout, written by Debian's python3-h5py
+// (tests/tools/write_hdf5_layouts.py), with the folder's calibration: the same outputs again.
+TEST(RecordingRuns, EsimInTheMvsecHdf5LayoutGivesByteIdenticalOutputs) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import h5py, numpy, PIL' > /dev/null 2>&1") == 0,
+                        "Debian python3-h5py, python3-pil");
+  const auto out = test::tempDir("mvsec_runs");
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_hdf5_layouts.py " +
+                          dir.string() + " " + out.string() + " 1.4";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  OdometryConfig cfg = syncConfig();
+  cfg.duration_s = 1.4;
+  const Sequence folder(dir);
+  Sequence mvsec(out / "mvsec.h5");
+  EXPECT_EQ(mvsec.format(), "MVSEC HDF5 (davis/left)");
+  mvsec.setCamera(readCameraFile(dir / "calib.txt"), "calib.txt");
+  ASSERT_EQ(mvsec.frames().size(), 36u);
+  for (std::size_t i = 0; i < mvsec.frames().size(); ++i) {
+    ASSERT_EQ(mvsec.frames()[i].t, folder.frames()[i].t);
+    ASSERT_EQ(cv::norm(mvsec.loadFrame(i), folder.loadFrame(i), cv::NORM_INF), 0.0) << i;
+  }
+  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(mvsec, cfg);
+  ASSERT_TRUE(a.initialized);
+  writeOdometryOutputs(out / "folder", a, cfg);
+  writeOdometryOutputs(out / "mvsec", b, cfg);
+  expectSameOutputs(out / "folder", out / "mvsec");
+}
+
 }  // namespace
 }  // namespace eds

@@ -1,0 +1,155 @@
+#include "io/hdf5_mvsec.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+#include "io/hdf5_common.hpp"
+
+namespace eds {
+
+using hdf5::Hid;
+
+namespace {
+
+constexpr hsize_t kBlockRows = 1 << 16;
+
+Hid openFile(const std::string& path) {
+  hdf5::QuietHdf5 quiet;
+  Hid f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!f.valid()) hdf5::failH5(path, "cannot open as HDF5");
+  return f;
+}
+
+// Opens a dataset and returns its dimensions; InputError when it is missing or has another rank.
+Hid openArray(hid_t file, const std::string& path, const std::string& name, int rank, hsize_t* dims) {
+  if (H5Lexists(file, name.substr(0, name.rfind('/')).c_str(), H5P_DEFAULT) <= 0 ||
+      H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0)
+    throw InputError(path, "missing dataset " + name);
+  Hid ds(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!ds.valid()) hdf5::failH5(path, name + " is not a dataset");
+  Hid space(H5Dget_space(ds.get()), H5Sclose);
+  if (H5Sget_simple_extent_ndims(space.get()) != rank)
+    throw InputError(path, name + " is not a " + std::to_string(rank) + "-D array");
+  H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+  return ds;
+}
+
+// Reads rows [row, row + count) of a 2-D or 3-D dataset into `out` as `mem_type`.
+void readRows(hid_t ds, const std::string& path, const std::string& name, int rank, const hsize_t* dims,
+              hsize_t row, hsize_t count, hid_t mem_type, void* out) {
+  hsize_t start[3] = {row, 0, 0}, extent[3] = {count, rank > 1 ? dims[1] : 1, rank > 2 ? dims[2] : 1};
+  Hid file_space(H5Dget_space(ds), H5Sclose);
+  H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, extent, nullptr);
+  Hid mem_space(H5Screate_simple(rank, extent, nullptr), H5Sclose);
+  if (H5Dread(ds, mem_type, mem_space.get(), file_space.get(), H5P_DEFAULT, out) < 0)
+    hdf5::failH5(path,
+                 "cannot read " + name + " rows " + std::to_string(row) + ".." + std::to_string(row + count));
+}
+
+}  // namespace
+
+bool isMvsecFile(const std::filesystem::path& file, const std::string& side) {
+  hdf5::QuietHdf5 quiet;
+  Hid f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!f.valid()) return false;
+  for (const std::string& g : {std::string("davis"), "davis/" + side, "davis/" + side + "/events"})
+    if (H5Lexists(f.get(), g.c_str(), H5P_DEFAULT) <= 0) return false;
+  return true;
+}
+
+MvsecFrames readMvsecFrameIndex(const std::filesystem::path& file, const std::string& side) {
+  const std::string path = file.string(), group = "davis/" + side + "/";
+  Hid f = openFile(path);
+  MvsecFrames frames;
+  if (H5Lexists(f.get(), (group + "image_raw").c_str(), H5P_DEFAULT) <= 0) return frames;
+  hsize_t dims[3] = {}, ts_dims[1] = {};
+  Hid images = openArray(f.get(), path, group + "image_raw", 3, dims);
+  Hid ts = openArray(f.get(), path, group + "image_raw_ts", 1, ts_dims);
+  if (ts_dims[0] != dims[0])
+    throw InputError(path, group + "image_raw_ts has " + std::to_string(ts_dims[0]) + " times for " +
+                               std::to_string(dims[0]) + " images");
+  std::vector<double> seconds(ts_dims[0]);
+  if (!seconds.empty())
+    readRows(ts.get(), path, group + "image_raw_ts", 1, ts_dims, 0, ts_dims[0], H5T_NATIVE_DOUBLE,
+             seconds.data());
+  for (std::size_t i = 0; i < seconds.size(); ++i) {
+    if (!std::isfinite(seconds[i]))
+      throw InputError(path, group + "image_raw_ts[" + std::to_string(i) + "] is not finite");
+    frames.t.push_back(fromSeconds(seconds[i]));
+    if (i > 0 && frames.t[i] <= frames.t[i - 1])
+      throw InputError(path, group + "image_raw_ts[" + std::to_string(i) + "]: times must increase");
+  }
+  frames.height = static_cast<int>(dims[1]);
+  frames.width = static_cast<int>(dims[2]);
+  return frames;
+}
+
+cv::Mat readMvsecFrame(const std::filesystem::path& file, std::size_t i, const std::string& side) {
+  const std::string path = file.string(), name = "davis/" + side + "/image_raw";
+  Hid f = openFile(path);
+  hsize_t dims[3] = {};
+  Hid images = openArray(f.get(), path, name, 3, dims);
+  if (i >= dims[0]) throw InputError(path, name + ": no image " + std::to_string(i));
+  cv::Mat img(static_cast<int>(dims[1]), static_cast<int>(dims[2]), CV_8UC1);
+  readRows(images.get(), path, name, 3, dims, i, 1, H5T_NATIVE_UINT8, img.data);
+  return img;
+}
+
+struct MvsecEventSource::Impl {
+  std::string path, name;
+  int width, height;
+  Hid file, events;
+  hsize_t dims[2] = {};
+  hsize_t row = 0;
+  std::vector<double> rows;
+  TimeNs last_t = std::numeric_limits<TimeNs>::min();
+};
+
+MvsecEventSource::MvsecEventSource(const std::filesystem::path& file, int width, int height,
+                                   const std::string& side)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.path = file.string();
+  m.name = "davis/" + side + "/events";
+  m.width = width;
+  m.height = height;
+  m.file = openFile(m.path);
+  m.events = openArray(m.file.get(), m.path, m.name, 2, m.dims);
+  if (m.dims[1] != 4)
+    throw InputError(m.path, m.name + " has " + std::to_string(m.dims[1]) + " columns, not 4 (x, y, t, p)");
+}
+
+MvsecEventSource::~MvsecEventSource() = default;
+std::optional<std::size_t> MvsecEventSource::size() const { return static_cast<std::size_t>(impl_->dims[0]); }
+
+bool MvsecEventSource::decodeNextBlock(EventArray& block) {
+  Impl& m = *impl_;
+  if (m.row >= m.dims[0]) return false;
+  const hsize_t n = std::min(kBlockRows, m.dims[0] - m.row);
+  m.rows.resize(4 * n);
+  readRows(m.events.get(), m.path, m.name, 2, m.dims, m.row, n, H5T_NATIVE_DOUBLE, m.rows.data());
+  block.resize(n);
+  for (hsize_t i = 0; i < n; ++i) {
+    const double* r = &m.rows[4 * i];
+    const std::string at = m.name + "[" + std::to_string(m.row + i) + "]";
+    if (!std::isfinite(r[0]) || !std::isfinite(r[1]) || !std::isfinite(r[2]))
+      throw InputError(m.path, at + " is not finite");
+    if (r[0] < 0 || r[1] < 0 || r[0] != std::floor(r[0]) || r[1] != std::floor(r[1]) ||
+        (m.width > 0 && (r[0] >= m.width || r[1] >= m.height)))
+      throw InputError(m.path, at + ": pixel (" + std::to_string(r[0]) + ", " + std::to_string(r[1]) +
+                                   ") is not a pixel of the " + std::to_string(m.width) + "x" +
+                                   std::to_string(m.height) + " sensor");
+    const TimeNs t = fromSeconds(r[2]);
+    if (t < m.last_t) throw InputError(m.path, at + ": time " + std::to_string(r[2]) + " s goes back");
+    m.last_t = t;
+    block.t[i] = t;
+    block.x[i] = static_cast<std::uint16_t>(r[0]);
+    block.y[i] = static_cast<std::uint16_t>(r[1]);
+    block.p[i] = r[3] > 0 ? 1 : -1;
+  }
+  m.row += n;
+  return true;
+}
+
+}  // namespace eds
