@@ -25,7 +25,7 @@ using hdf5::loadBlosc;
 using hdf5::QuietHdf5;
 
 enum Field { kT = 0, kX = 1, kY = 2, kP = 3 };
-constexpr std::array<const char*, 4> kFieldNames = {"events/t", "events/x", "events/y", "events/p"};
+constexpr std::array<const char*, 4> kFieldNames = {"t", "x", "y", "p"};
 
 // Called by HDF5 when a stored value does not fit the memory type: the default would clip it
 // silently (a negative x would become 0), so the read is aborted and reported instead.
@@ -97,6 +97,7 @@ Hid openDataset(hid_t file, const std::string& path, const char* name, std::size
 struct Hdf5EventSource::Impl {
   std::string path;
   Hdf5EventOptions options;
+  std::array<std::string, 4> names;  // group/t, group/x, group/y, group/p
   Hid file;
   std::array<Hid, 4> ds;
   std::array<Hid, 4> fspace;
@@ -117,8 +118,8 @@ struct Hdf5EventSource::Impl {
     overflow = false;
     if (H5Sselect_hyperslab(fspace[f].get(), H5S_SELECT_SET, s, nullptr, c, nullptr) < 0 ||
         H5Dread(ds[f].get(), memtype, mspace.get(), fspace[f].get(), dxpl.get(), buf) < 0) {
-      const std::string where = std::string(kFieldNames[f]) + "[" + std::to_string(start) + ".." +
-                                std::to_string(start + count) + ")";
+      const std::string where =
+          names[f] + "[" + std::to_string(start) + ".." + std::to_string(start + count) + ")";
       if (overflow) throw InputError(path, where + " holds a value out of range for its field");
       failH5(path, "cannot read " + where);
     }
@@ -224,9 +225,9 @@ struct Hdf5EventSource::Impl {
     if (!bad) return;
     std::size_t i = 0;
     while (v[i] < lim) ++i;
-    throw InputError(path, std::string(kFieldNames[f]) + "[" + std::to_string(pos + i) +
-                               "] = " + std::to_string(v[i]) + " is outside the sensor (" +
-                               (f == kX ? "width " : "height ") + std::to_string(limit) + ")");
+    throw InputError(path, names[f] + "[" + std::to_string(pos + i) + "] = " + std::to_string(v[i]) +
+                               " is outside the sensor (" + (f == kX ? "width " : "height ") +
+                               std::to_string(limit) + ")");
   }
 };
 
@@ -250,13 +251,14 @@ Hdf5EventSource::Hdf5EventSource(const std::string& path, Hdf5EventOptions optio
 
   std::array<std::size_t, 4> lengths{};
   for (int f = 0; f < 4; ++f) {
-    m.ds[f] = openDataset(m.file.get(), path, kFieldNames[f], &lengths[f]);
+    m.names[f] = m.options.group + "/" + kFieldNames[f];
+    m.ds[f] = openDataset(m.file.get(), path, m.names[f].c_str(), &lengths[f]);
     m.fspace[f] = Hid(H5Dget_space(m.ds[f].get()), H5Sclose);
   }
   for (int f = 1; f < 4; ++f) {
     if (lengths[f] != lengths[0]) {
-      throw InputError(path, std::string(kFieldNames[f]) + " has " + std::to_string(lengths[f]) +
-                                 " elements but events/t has " + std::to_string(lengths[0]));
+      throw InputError(path, m.names[f] + " has " + std::to_string(lengths[f]) + " elements but " +
+                                 m.names[0] + " has " + std::to_string(lengths[0]));
     }
   }
   m.n = lengths[0];
@@ -278,8 +280,8 @@ Hdf5EventSource::Hdf5EventSource(const std::string& path, Hdf5EventOptions optio
       failH5(path, "cannot read t_offset");
     }
   }
-  if (H5Lexists(m.file.get(), "ms_to_idx", H5P_DEFAULT) > 0) {
-    m.ms_to_idx = openDataset(m.file.get(), path, "ms_to_idx", &m.ms_count);
+  if (H5Lexists(m.file.get(), m.options.ms_index.c_str(), H5P_DEFAULT) > 0) {
+    m.ms_to_idx = openDataset(m.file.get(), path, m.options.ms_index.c_str(), &m.ms_count);
   }
 }
 

@@ -20,6 +20,10 @@ struct Hdf5EventOptions {
   // Sensor size; when > 0 every pixel is checked against it (0 disables the check).
   int width = 0;
   int height = 0;
+  // Where the x, y, t, p datasets and the millisecond index are: DSEC and TUM-VIE "events" and
+  // "ms_to_idx"; M3ED "prophesee/left" and "prophesee/left/ms_map_idx".
+  std::string group = "events";
+  std::string ms_index = "ms_to_idx";
 };
 
 class Hdf5EventSource : public EventSource {

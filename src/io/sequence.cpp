@@ -15,7 +15,7 @@
 #include "io/aedat4.hpp"
 #include "io/ecd_events.hpp"
 #include "io/hdf5_events.hpp"
-#include "io/hdf5_mvsec.hpp"
+#include "io/hdf5_layouts.hpp"
 #include "io/kalibr.hpp"
 #include "io/line_reader.hpp"
 #include "io/prophesee.hpp"
@@ -272,13 +272,17 @@ void Sequence::openRecordingFile(const fs::path& file) {
     openRosRecording(file);
     return;
   }
-  if (isHdf5File(file) && isMvsecFile(file)) {
-    event_storage_ = EventStorage::kHdf5Mvsec;
-    format_ = "MVSEC HDF5 (davis/left)";
-    const MvsecFrames frames = readMvsecFrameIndex(file);
+  const Hdf5Layout layout = isHdf5File(file) ? detectHdf5Layout(file) : Hdf5Layout::kNone;
+  if (layout == Hdf5Layout::kMvsec || layout == Hdf5Layout::kM3ed) {
+    event_storage_ = layout == Hdf5Layout::kMvsec ? EventStorage::kHdf5Mvsec : EventStorage::kHdf5;
+    format_ =
+        layout == Hdf5Layout::kMvsec ? "MVSEC HDF5 (davis/left)" : "M3ED HDF5 (prophesee/left, ovc/left)";
+    hdf5_frames_ = frameDatasets(layout);
+    const Hdf5FrameIndex frames = readHdf5FrameIndex(file, hdf5_frames_);
     for (std::size_t i = 0; i < frames.t.size(); ++i) frames_.push_back({frames.t[i], file, i});
     width_ = frames.width > 0 ? frames.width : options_.width;
     height_ = frames.height > 0 ? frames.height : options_.height;
+    if (layout == Hdf5Layout::kM3ed) hdf5_group_ = "prophesee/left";
     return;
   }
   if (isHdf5File(file)) {
@@ -353,6 +357,10 @@ std::unique_ptr<EventSource> Sequence::openEvents() const {
     Hdf5EventOptions opts;
     opts.width = width_;
     opts.height = height_;
+    if (!hdf5_group_.empty()) {
+      opts.group = hdf5_group_;
+      opts.ms_index = hdf5_group_ + "/ms_map_idx";
+    }
     return std::make_unique<Hdf5EventSource>(events_file_.string(), opts);
   }
   EcdEventOptions opts;
@@ -365,8 +373,8 @@ cv::Mat Sequence::loadFrame(std::size_t i) const {
   if (i >= frames_.size()) throw std::out_of_range("Sequence::loadFrame: frame index out of range");
   const std::string path = frames_[i].path.string();
   cv::Mat img = event_storage_ == EventStorage::kAedat4 ? readAedat4Frame(frames_[i].path, frames_[i].offset)
-                : event_storage_ == EventStorage::kHdf5Mvsec
-                    ? readMvsecFrame(frames_[i].path, frames_[i].offset)
+                : !hdf5_frames_.images.empty()
+                    ? readHdf5Frame(frames_[i].path, hdf5_frames_, frames_[i].offset)
                 : ros_frames_ ? ros_frames_->load(frames_[i].offset)
                               : cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (img.empty()) throw InputError(path, "cannot read image (missing or not an image)");

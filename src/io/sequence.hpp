@@ -9,8 +9,8 @@
 // "missing" only when the requested work needs it.
 // A sequence can also be one recording file, told by its content: an AEDAT 4.0 file (events, frames,
 // IMU), a Prophesee EVT 2.0/3.0 `.raw` file, a ROS 1 bag, a rosbag2 (`.db3`, `.mcap`, or its folder)
-// an HDF5 event file (DSEC / TUM-VIE layout) or an MVSEC HDF5 file (events and frames). Bags also give frames
-// (sensor_msgs/Image), calibration (sensor_msgs/CameraInfo) and ground truth (PoseStamped /
+// an HDF5 event file (DSEC / TUM-VIE layout) or an MVSEC or M3ED HDF5 file (events and frames). Bags also
+// give frames (sensor_msgs/Image), calibration (sensor_msgs/CameraInfo) and ground truth (PoseStamped /
 // TransformStamped); --calib overrides.
 #include <cstdint>
 #include <filesystem>
@@ -22,6 +22,7 @@
 
 #include "core/camera.hpp"
 #include "io/event_source.hpp"
+#include "io/hdf5_layouts.hpp"
 #include "io/trajectory_io.hpp"
 
 namespace eds {
@@ -92,7 +93,9 @@ class Sequence {
   std::optional<CameraModel> camera_;
   int width_ = 0, height_ = 0;
   std::uint64_t imu_samples_ = 0;
-  Trajectory recorded_gt_;                            // ground truth read from a recording file
+  Hdf5FrameDatasets hdf5_frames_;  // where an HDF5 recording keeps its frames (images empty: none)
+  std::string hdf5_group_;         // the group of an HDF5 recording's x, y, t, p (empty: "events")
+  Trajectory recorded_gt_;         // ground truth read from a recording file
   std::shared_ptr<class RosFrameLoader> ros_frames_;  // decodes a bag's frames on demand
 };
 

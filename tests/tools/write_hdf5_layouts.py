@@ -3,8 +3,11 @@
 test input for eds's HDF5 readers (they share no code with this script).
 
 usage: write_hdf5_layouts.py SEQUENCE_DIR OUT_DIR UNTIL_S
-writes OUT_DIR/mvsec.h5: davis/left/events (N x 4 float64: x, y, t [s], p -1/+1),
-davis/left/image_raw (N x H x W uint8), davis/left/image_raw_ts (N float64 [s]), up to UNTIL_S.
+writes, up to UNTIL_S,
+OUT_DIR/mvsec.h5: davis/left/events (N x 4 float64: x, y, t [s], p -1/+1),
+  davis/left/image_raw (N x H x W uint8), davis/left/image_raw_ts (N float64 [s]);
+OUT_DIR/m3ed.h5: prophesee/left/{x, y (uint16), t (int64 us), p (int8 0/1), ms_map_idx (uint64)},
+  ovc/left/data (N x H x W x 1 uint8), ovc/ts (N int64 us).
 """
 import gzip
 import sys
@@ -36,6 +39,19 @@ def main():
         left.create_dataset("events", data=np.array(rows, dtype=np.float64), chunks=(4096, 4), compression="gzip")
         left.create_dataset("image_raw", data=np.stack(images), compression="gzip")
         left.create_dataset("image_raw_ts", data=np.array(stamps, dtype=np.float64))
+    ev = np.array(rows, dtype=np.float64)
+    t_us = np.array([int(round(t * 1e9)) // 1000 for t in ev[:, 2]], dtype=np.int64)
+    with h5py.File(out_dir + "/m3ed.h5", "w") as h:
+        left = h.create_group("prophesee").create_group("left")
+        left.create_dataset("x", data=ev[:, 0].astype(np.uint16))
+        left.create_dataset("y", data=ev[:, 1].astype(np.uint16))
+        left.create_dataset("t", data=t_us)
+        left.create_dataset("p", data=(ev[:, 3] > 0).astype(np.int8))
+        ms = np.searchsorted(t_us, np.arange(0, t_us[-1] // 1000 + 2) * 1000).astype(np.uint64)
+        left.create_dataset("ms_map_idx", data=ms)
+        ovc = h.create_group("ovc")
+        ovc.create_group("left").create_dataset("data", data=np.stack(images)[..., None])
+        ovc.create_dataset("ts", data=np.array([int(round(s * 1e6)) for s in stamps], dtype=np.int64))
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-#include "io/hdf5_mvsec.hpp"
+#include "io/hdf5_layouts.hpp"
 
 #include <cmath>
 #include <limits>
@@ -38,7 +38,8 @@ Hid openArray(hid_t file, const std::string& path, const std::string& name, int 
 // Reads rows [row, row + count) of a 2-D or 3-D dataset into `out` as `mem_type`.
 void readRows(hid_t ds, const std::string& path, const std::string& name, int rank, const hsize_t* dims,
               hsize_t row, hsize_t count, hid_t mem_type, void* out) {
-  hsize_t start[3] = {row, 0, 0}, extent[3] = {count, rank > 1 ? dims[1] : 1, rank > 2 ? dims[2] : 1};
+  hsize_t start[4] = {row, 0, 0, 0};
+  hsize_t extent[4] = {count, rank > 1 ? dims[1] : 1, rank > 2 ? dims[2] : 1, rank > 3 ? dims[3] : 1};
   Hid file_space(H5Dget_space(ds), H5Sclose);
   H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, extent, nullptr);
   Hid mem_space(H5Screate_simple(rank, extent, nullptr), H5Sclose);
@@ -49,50 +50,89 @@ void readRows(hid_t ds, const std::string& path, const std::string& name, int ra
 
 }  // namespace
 
-bool isMvsecFile(const std::filesystem::path& file, const std::string& side) {
+Hdf5Layout detectHdf5Layout(const std::filesystem::path& file) {
   hdf5::QuietHdf5 quiet;
   Hid f(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!f.valid()) return false;
-  for (const std::string& g : {std::string("davis"), "davis/" + side, "davis/" + side + "/events"})
-    if (H5Lexists(f.get(), g.c_str(), H5P_DEFAULT) <= 0) return false;
-  return true;
+  if (!f.valid()) return Hdf5Layout::kNone;
+  const auto has = [&](std::initializer_list<const char*> chain) {
+    for (const char* g : chain)
+      if (H5Lexists(f.get(), g, H5P_DEFAULT) <= 0) return false;
+    return true;
+  };
+  if (has({"davis", "davis/left", "davis/left/events"})) return Hdf5Layout::kMvsec;
+  if (has({"prophesee", "prophesee/left", "prophesee/left/t"})) return Hdf5Layout::kM3ed;
+  if (has({"events", "events/t"})) return Hdf5Layout::kDsec;
+  return Hdf5Layout::kNone;
 }
 
-MvsecFrames readMvsecFrameIndex(const std::filesystem::path& file, const std::string& side) {
-  const std::string path = file.string(), group = "davis/" + side + "/";
+Hdf5FrameDatasets frameDatasets(Hdf5Layout layout) {
+  if (layout == Hdf5Layout::kMvsec) return {"davis/left/image_raw", "davis/left/image_raw_ts", true};
+  if (layout == Hdf5Layout::kM3ed) return {"ovc/left/data", "ovc/ts", false};
+  return {};
+}
+
+namespace {
+
+// A frame stack is N x H x W, or N x H x W x 1.
+Hid openFrames(hid_t file, const std::string& path, const std::string& name, hsize_t* dims) {
+  Hid ds = H5Lexists(file, name.substr(0, name.find('/')).c_str(), H5P_DEFAULT) > 0 &&
+                   H5Lexists(file, name.c_str(), H5P_DEFAULT) > 0
+               ? Hid(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose)
+               : Hid();
+  if (!ds.valid()) throw InputError(path, "missing dataset " + name);
+  Hid space(H5Dget_space(ds.get()), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  dims[3] = 1;
+  if (rank < 3 || rank > 4) throw InputError(path, name + " is not an N x H x W (x 1) image stack");
+  H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+  if (dims[3] != 1) throw InputError(path, name + " has " + std::to_string(dims[3]) + " channels, not 1");
+  return ds;
+}
+
+}  // namespace
+
+Hdf5FrameIndex readHdf5FrameIndex(const std::filesystem::path& file, const Hdf5FrameDatasets& where) {
+  const std::string path = file.string();
   Hid f = openFile(path);
-  MvsecFrames frames;
-  if (H5Lexists(f.get(), (group + "image_raw").c_str(), H5P_DEFAULT) <= 0) return frames;
-  hsize_t dims[3] = {}, ts_dims[1] = {};
-  Hid images = openArray(f.get(), path, group + "image_raw", 3, dims);
-  Hid ts = openArray(f.get(), path, group + "image_raw_ts", 1, ts_dims);
+  Hdf5FrameIndex frames;
+  if (where.images.empty() ||
+      H5Lexists(f.get(), where.images.substr(0, where.images.find('/')).c_str(), H5P_DEFAULT) <= 0 ||
+      H5Lexists(f.get(), where.images.c_str(), H5P_DEFAULT) <= 0)
+    return frames;
+  hsize_t dims[4] = {}, ts_dims[1] = {};
+  Hid images = openFrames(f.get(), path, where.images, dims);
+  Hid ts = openArray(f.get(), path, where.times, 1, ts_dims);
   if (ts_dims[0] != dims[0])
-    throw InputError(path, group + "image_raw_ts has " + std::to_string(ts_dims[0]) + " times for " +
+    throw InputError(path, where.times + " has " + std::to_string(ts_dims[0]) + " times for " +
                                std::to_string(dims[0]) + " images");
   std::vector<double> seconds(ts_dims[0]);
-  if (!seconds.empty())
-    readRows(ts.get(), path, group + "image_raw_ts", 1, ts_dims, 0, ts_dims[0], H5T_NATIVE_DOUBLE,
-             seconds.data());
-  for (std::size_t i = 0; i < seconds.size(); ++i) {
-    if (!std::isfinite(seconds[i]))
-      throw InputError(path, group + "image_raw_ts[" + std::to_string(i) + "] is not finite");
-    frames.t.push_back(fromSeconds(seconds[i]));
+  std::vector<std::int64_t> micros(ts_dims[0]);
+  if (ts_dims[0] > 0)
+    readRows(ts.get(), path, where.times, 1, ts_dims, 0, ts_dims[0],
+             where.times_in_seconds ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64,
+             where.times_in_seconds ? static_cast<void*>(seconds.data()) : static_cast<void*>(micros.data()));
+  for (std::size_t i = 0; i < ts_dims[0]; ++i) {
+    if (where.times_in_seconds && !std::isfinite(seconds[i]))
+      throw InputError(path, where.times + "[" + std::to_string(i) + "] is not finite");
+    frames.t.push_back(where.times_in_seconds ? fromSeconds(seconds[i]) : micros[i] * 1000);
     if (i > 0 && frames.t[i] <= frames.t[i - 1])
-      throw InputError(path, group + "image_raw_ts[" + std::to_string(i) + "]: times must increase");
+      throw InputError(path, where.times + "[" + std::to_string(i) + "]: times must increase");
   }
   frames.height = static_cast<int>(dims[1]);
   frames.width = static_cast<int>(dims[2]);
   return frames;
 }
 
-cv::Mat readMvsecFrame(const std::filesystem::path& file, std::size_t i, const std::string& side) {
-  const std::string path = file.string(), name = "davis/" + side + "/image_raw";
+cv::Mat readHdf5Frame(const std::filesystem::path& file, const Hdf5FrameDatasets& where, std::size_t i) {
+  const std::string path = file.string();
   Hid f = openFile(path);
-  hsize_t dims[3] = {};
-  Hid images = openArray(f.get(), path, name, 3, dims);
-  if (i >= dims[0]) throw InputError(path, name + ": no image " + std::to_string(i));
+  hsize_t dims[4] = {};
+  Hid images = openFrames(f.get(), path, where.images, dims);
+  if (i >= dims[0]) throw InputError(path, where.images + ": no image " + std::to_string(i));
   cv::Mat img(static_cast<int>(dims[1]), static_cast<int>(dims[2]), CV_8UC1);
-  readRows(images.get(), path, name, 3, dims, i, 1, H5T_NATIVE_UINT8, img.data);
+  Hid space(H5Dget_space(images.get()), H5Sclose);
+  readRows(images.get(), path, where.images, H5Sget_simple_extent_ndims(space.get()), dims, i, 1,
+           H5T_NATIVE_UINT8, img.data);
   return img;
 }
 
