@@ -2,6 +2,8 @@
 // table (topic_id, timestamp, data) read in recording order, one row at a time.
 #include <sqlite3.h>
 
+#include <memory>
+
 #include "io/ros_bag_formats.hpp"
 
 namespace eds {
@@ -15,10 +17,6 @@ class SqliteBag : public RosBagReader {
       fail("cannot open as an SQLite database");
     readTopics();
     rewind();
-  }
-  ~SqliteBag() override {
-    sqlite3_finalize(messages_);
-    sqlite3_close(db_);
   }
 
   const std::string& path() const override { return path_; }
@@ -63,13 +61,15 @@ class SqliteBag : public RosBagReader {
   }
 
   void readTopics() {
-    sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(
-            db_,
-            "SELECT t.id, t.name, t.type, t.serialization_format, "
-            "(SELECT COUNT(*) FROM messages m WHERE m.topic_id = t.id) FROM topics t ORDER BY t.id",
-            -1, &st, nullptr) != SQLITE_OK)
-      fail("not a rosbag2 database (no topics/messages tables)");
+    sqlite3_stmt* raw = nullptr;
+    const int prepared = sqlite3_prepare_v2(
+        db_,
+        "SELECT t.id, t.name, t.type, t.serialization_format, "
+        "(SELECT COUNT(*) FROM messages m WHERE m.topic_id = t.id) FROM topics t ORDER BY t.id",
+        -1, &raw, nullptr);
+    const std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> statement(raw, sqlite3_finalize);
+    sqlite3_stmt* st = statement.get();
+    if (prepared != SQLITE_OK) fail("not a rosbag2 database (no topics/messages tables)");
     int rc;
     while ((rc = sqlite3_step(st)) == SQLITE_ROW) {
       RosTopic t;
@@ -88,13 +88,21 @@ class SqliteBag : public RosBagReader {
       topic_index_[sqlite3_column_int64(st, 0)] = topics_.size();
       topics_.push_back(std::move(t));
     }
-    sqlite3_finalize(st);
     if (rc != SQLITE_DONE) fail("reading the topics table");
   }
 
   std::string path_, where_;
-  sqlite3* db_ = nullptr;
-  sqlite3_stmt* messages_ = nullptr;
+  // Closed by this member's destructor, which also runs when the constructor throws.
+  struct Handles {
+    sqlite3* db = nullptr;
+    sqlite3_stmt* messages = nullptr;
+    ~Handles() {
+      sqlite3_finalize(messages);
+      sqlite3_close(db);
+    }
+  } handles_;
+  sqlite3*& db_ = handles_.db;
+  sqlite3_stmt*& messages_ = handles_.messages;
   std::vector<RosTopic> topics_;
   std::unordered_map<std::int64_t, std::size_t> topic_index_;
   std::uint64_t index_ = 0;
