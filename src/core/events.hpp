@@ -52,6 +52,14 @@ inline void appendRange(EventArray& out, const EventArray& src, std::size_t from
   out.p.insert(out.p.end(), src.p.begin() + b, src.p.begin() + e);
 }
 
+// An inertial measurement, in SI units in the sensor's own frame: recorded and exposed, not yet used
+// by the odometry.
+struct ImuSample {
+  TimeNs t = 0;
+  double acc[3] = {0, 0, 0};   // linear acceleration, m/s^2
+  double gyro[3] = {0, 0, 0};  // angular velocity, rad/s
+};
+
 // An external trigger edge (a flash, a shutter signal) recorded by the sensor beside its events.
 struct TriggerEvent {
   TimeNs t = 0;

@@ -13,9 +13,8 @@ namespace {
 
 constexpr char kMagic[] = "#!AER-DAT4.0\r\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
-constexpr std::size_t kEventBytes = 16;  // struct Event { int64 t; int16 x, y; bool on; } padded
-constexpr std::size_t kImuBytes = 48;  // struct IMU { int64 t; float temperature, acc[3], gyro[3], mag[3]; }
-constexpr std::size_t kTriggerBytes = 16;
+constexpr std::size_t kEventBytes = 16;   // struct Event { int64 t; int16 x, y; bool on; } padded
+constexpr std::size_t kTriggerBytes = 4;  // triggers are tables: a vector of offsets
 constexpr TimeNs kNsPerUs = 1000;
 
 // The value of `<attr key="KEY" ...>VALUE</attr>` within text.
@@ -47,6 +46,21 @@ std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
     streams.push_back(s);
   }
   return streams;
+}
+
+// DV's IMU samples are tables: timestamp (int64 µs), temperature, accelerometer xyz (g), gyroscope xyz
+// (deg/s), magnetometer xyz (floats).
+void appendImu(const FlatTable& packet, std::vector<ImuSample>& out) {
+  constexpr double kG = 9.80665, kDegToRad = 3.14159265358979323846 / 180.0;
+  for (const FlatTable& imu : packet.tables(0)) {
+    ImuSample s;
+    s.t = imu.scalar<std::int64_t>(0, 0) * kNsPerUs;
+    for (int k = 0; k < 3; ++k) {
+      s.acc[k] = imu.scalar<float>(2 + k, 0.0f) * kG;
+      s.gyro[k] = imu.scalar<float>(5 + k, 0.0f) * kDegToRad;
+    }
+    out.push_back(s);
+  }
 }
 
 }  // namespace
@@ -152,8 +166,8 @@ Aedat4Counts scanAedat4(const std::filesystem::path& file) {
       c.events += n;
       for (std::size_t i = 0; i < n; ++i) c.events_on += e.data()[i * kEventBytes + 12] != 0;
     } else if (p.type == "IMUS") {
-      root.vector(0, kImuBytes, n);
-      c.imu += n;
+      appendImu(root, c.imu_samples);
+      c.imu = c.imu_samples.size();
     } else if (p.type == "TRIG") {
       root.vector(0, kTriggerBytes, n);
       c.triggers += n;

@@ -55,6 +55,7 @@ class Aedat4Reader {
 // Counts of a whole file, in one pass over its packets.
 struct Aedat4Counts {
   std::uint64_t events = 0, events_on = 0, imu = 0, triggers = 0;
+  std::vector<ImuSample> imu_samples;  // DV's g and deg/s converted to m/s^2 and rad/s
   std::vector<Aedat4Frame> frames;
 };
 Aedat4Counts scanAedat4(const std::filesystem::path& file);

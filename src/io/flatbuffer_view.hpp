@@ -2,7 +2,9 @@
 // Reading FlatBuffers tables in place (AEDAT 4.0 packets), bounds-checked: a root offset, tables that
 // point to their vtable, vectors and strings by 32-bit relative offsets. Only what the readers need.
 #include <cstdint>
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include "io/binary_file.hpp"
 
@@ -51,6 +53,20 @@ class FlatTable {
     std::size_t n = 0;
     const ByteView s = vector(index, 1, n);
     return n == 0 ? std::string() : std::string(reinterpret_cast<const char*>(s.data()), n);
+  }
+  // A vector of tables: each element is a 32-bit offset, from the element, to its table.
+  std::vector<FlatTable> tables(int index) const {
+    std::size_t n = 0;
+    const ByteView v = vector(index, 4, n);
+    std::vector<FlatTable> out;
+    out.reserve(n);
+    const auto first = static_cast<std::size_t>(v.data() - buf_.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      std::uint32_t off;
+      std::memcpy(&off, v.data() + 4 * i, 4);
+      out.push_back(FlatTable(buf_, first + 4 * i + off));
+    }
+    return out;
   }
   FlatTable table(int index) const {
     const std::size_t p = fieldPos(index);

@@ -39,6 +39,18 @@ StampedPose decodePose(RosMessageReader& r, bool transform) {
   return p;
 }
 
+// sensor_msgs/Imu: header, orientation (4) + covariance (9), angular_velocity (3) + covariance (9),
+// linear_acceleration (3) + covariance (9), all float64.
+ImuSample decodeImu(RosMessageReader& r) {
+  ImuSample s;
+  s.t = r.header();
+  for (int i = 0; i < 13; ++i) r.f64("orientation");
+  for (double& w : s.gyro) w = r.f64("angular_velocity");
+  for (int i = 0; i < 9; ++i) r.f64("angular_velocity_covariance");
+  for (double& a : s.acc) a = r.f64("linear_acceleration");
+  return s;
+}
+
 }  // namespace
 
 cv::Mat decodeRosImage(RosMessageReader& r) {
@@ -131,7 +143,11 @@ RosRecordingIndex indexRosRecording(const std::filesystem::path& path, const Ros
   while (bag->next(m)) {
     const RosTopic& t = bag->topics()[m.topic];
     if (t.type == "sensor_msgs/Imu") {
+      if (idx.imu_topic.empty()) idx.imu_topic = t.name;
+      if (t.name != idx.imu_topic) continue;
       ++idx.imu;
+      RosMessageReader r(m.data, t.serialization);
+      idx.imu_samples.push_back(decodeImu(r));
       continue;
     }
     const bool image = t.name == idx.image_topic, gt = t.name == idx.gt_topic;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/events.hpp"
 #include "io/ros_bag.hpp"
 #include "io/trajectory_io.hpp"
 
@@ -32,6 +33,8 @@ struct RosRecordingIndex {
   std::optional<CameraModel> camera;  // from the first CameraInfo (plumb_bob / equidistant)
   Trajectory ground_truth;            // T_w_c, as the poses are written
   std::uint64_t imu = 0;
+  std::string imu_topic;
+  std::vector<ImuSample> imu_samples;  // of the first sensor_msgs/Imu topic
 };
 
 RosRecordingIndex indexRosRecording(const std::filesystem::path& path, const RosTopicChoice& choice);

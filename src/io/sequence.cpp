@@ -251,7 +251,7 @@ void Sequence::openRecordingFile(const fs::path& file) {
     format_ = "AEDAT 4.0";
     width_ = events.width();
     height_ = events.height();
-    imu_samples_ = counts.imu;
+    imu_ = counts.imu_samples;
     for (const Aedat4Frame& f : counts.frames) {
       if (!frames_.empty() && f.t <= frames_.back().t)
         throw errorAt(file.string(), f.packet_offset, "frame time stamps must increase");
@@ -317,7 +317,7 @@ void Sequence::openRosRecording(const fs::path& file) {
   if (!idx.image_topic.empty()) format_ += ", frames on " + idx.image_topic;
   for (const auto& f : idx.frames) frames_.push_back({f.t, file, f.message});
   recorded_gt_ = idx.ground_truth;
-  imu_samples_ = idx.imu;
+  imu_ = idx.imu_samples;
   if (!frames_.empty()) {
     ros_frames_ = std::make_shared<RosFrameLoader>(file);
     const cv::Mat first = loadFrame(0);

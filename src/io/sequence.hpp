@@ -59,7 +59,9 @@ class Sequence {
   bool hasFrames() const { return !frames_.empty(); }
   bool hasGroundTruth() const;
   bool hasCalibration() const { return camera_.has_value(); }
-  std::uint64_t imuSamples() const { return imu_samples_; }  // recorded IMU samples (not used yet)
+  std::uint64_t imuSamples() const { return imu_.size(); }
+  // The recorded IMU samples (AEDAT 4.0, bags), in time order; not used by the odometry yet.
+  const std::vector<ImuSample>& imu() const { return imu_; }
 
   // Calibration with resolution (from the Kalibr file, else the first image, else unknown = 0).
   const CameraModel& camera() const;
@@ -92,7 +94,7 @@ class Sequence {
   std::vector<FrameRef> frames_;
   std::optional<CameraModel> camera_;
   int width_ = 0, height_ = 0;
-  std::uint64_t imu_samples_ = 0;
+  std::vector<ImuSample> imu_;
   Hdf5FrameDatasets hdf5_frames_;  // where an HDF5 recording keeps its frames (images empty: none)
   std::string hdf5_group_;         // the group of an HDF5 recording's x, y, t, p (empty: "events")
   Trajectory recorded_gt_;         // ground truth read from a recording file

@@ -481,3 +481,34 @@ TEST(Mcap, ChunksCompressedByZstdAndLz4ProgramsGiveTheSameMessages) {
 
 }  // namespace
 }  // namespace eds
+
+namespace eds {
+namespace {
+
+TEST(WrittenBags, FramesCalibrationGroundTruthAndImuComeOutAsWritten) {
+  EDS_REQUIRE_WRITTEN_BAGS(dir);
+  const fs::path out = test::tempDir("recording_bag");
+  const fs::path esim = test::sharedDataDir() / "esim_poster6dof_planar";
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py " + esim.string() +
+                          " " + out.string() + " 1000 2500 0.3";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const Sequence bag(out / "recording.bag"), folder(esim);
+  EXPECT_EQ(bag.camera().fx, folder.camera().fx);
+  EXPECT_EQ(bag.camera().distortion, Distortion::kNone);
+  ASSERT_EQ(bag.frames().size(), 8u);  // 0 .. 0.28 s at 25 Hz
+  EXPECT_EQ(bag.frames().back().t, folder.frames()[7].t);
+  ASSERT_EQ(bag.groundTruth().size(), 60u);  // 200 Hz up to 0.3 s (0.2950 s the last)
+  ASSERT_EQ(bag.imu().size(), 61u);          // k = 0 .. 60
+  for (std::size_t k = 0; k < bag.imu().size(); ++k) {
+    const ImuSample& s = bag.imu()[k];
+    ASSERT_EQ(s.t, static_cast<TimeNs>(k) * 5'000'000);
+    EXPECT_EQ(s.gyro[0], 0.01 * static_cast<double>(k));
+    EXPECT_EQ(s.gyro[1], -0.02 * static_cast<double>(k));
+    EXPECT_EQ(s.gyro[2], 0.5);
+    EXPECT_EQ(s.acc[1], 9.81);
+    EXPECT_EQ(s.acc[2], -0.2 * static_cast<double>(k));
+  }
+}
+
+}  // namespace
+}  // namespace eds

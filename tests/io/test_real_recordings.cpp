@@ -2,6 +2,8 @@
 // (../shared/data/real/README.md): every count and time stamp must come out exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -261,6 +263,16 @@ TEST(Aedat4, Davis346FilesReproduceTheirReferenceNumbers) {
     EXPECT_EQ(seq.width(), 346);
     EXPECT_EQ(seq.height(), 260);
     EXPECT_EQ(seq.imuSamples(), r.imu);
+    // In SI units: a hand-held camera feels about one g; it turns at most a few rad/s.
+    std::vector<double> g;
+    for (std::size_t i = 0; i < seq.imu().size(); ++i) {
+      const ImuSample& s = seq.imu()[i];
+      if (i > 0) ASSERT_GT(s.t, seq.imu()[i - 1].t);
+      g.push_back(std::sqrt(s.acc[0] * s.acc[0] + s.acc[1] * s.acc[1] + s.acc[2] * s.acc[2]));
+      for (double w : s.gyro) EXPECT_LT(std::abs(w), 5.0);
+    }
+    std::nth_element(g.begin(), g.begin() + g.size() / 2, g.end());
+    EXPECT_NEAR(g[g.size() / 2], 9.81, 1.5);
     ASSERT_EQ(seq.frames().size(), r.frames_us.size());
     const cv::Mat frame = seq.loadFrame(seq.frames().size() - 1);
     EXPECT_EQ(frame.type(), CV_8UC1);

@@ -7,7 +7,8 @@ usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S
 writes OUT_DIR/events_{none,bz2,lz4}.bag (dvs_msgs/EventArray on /dvs/events); with UNTIL_S also
 OUT_DIR/recording.bag (lz4 unless COMPRESSION says otherwise): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
 calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
-(geometry_msgs/PoseStamped on /optitrack/davis) up to UNTIL_S seconds.
+(geometry_msgs/PoseStamped on /optitrack/davis) and IMU samples (sensor_msgs/Imu on /dvs/imu, see
+write_imu) up to UNTIL_S seconds.
 """
 import gzip
 import sys
@@ -29,6 +30,11 @@ DEFINITIONS = {
     "RegionOfInterest roi\n" + SEP + HEADER + SEP
     + "MSG: sensor_msgs/RegionOfInterest\nuint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\n"
     "bool do_rectify\n",
+    "sensor_msgs/Imu": "std_msgs/Header header\ngeometry_msgs/Quaternion orientation\nfloat64[9] orientation_covariance\n"
+    "geometry_msgs/Vector3 angular_velocity\nfloat64[9] angular_velocity_covariance\n"
+    "geometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n" + SEP + HEADER + SEP
+    + "MSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w\n" + SEP
+    + "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n",
     "geometry_msgs/PoseStamped": "std_msgs/Header header\ngeometry_msgs/Pose pose\n" + SEP + HEADER + SEP
     + "MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n" + SEP
     + "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n" + SEP
@@ -112,6 +118,21 @@ def write_ground_truth(bag, seq_dir, until):
             bag.write("/optitrack/davis", msg, t=msg.header.stamp)
 
 
+def write_imu(bag, until):
+    """200 Hz samples k = 0, 1, ...: angular velocity (0.01 k, -0.02 k, 0.5) rad/s, acceleration
+    (0.1, 9.81, -0.2 k) m/s^2."""
+    Imu = CLASSES["sensor_msgs/Imu"]
+    k = 0
+    while k * 0.005 <= until:
+        msg = Imu()
+        msg.header.stamp = rospy.Time(0, k * 5000000)
+        msg.orientation.w = 1.0
+        msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = 0.01 * k, -0.02 * k, 0.5
+        msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z = 0.1, 9.81, -0.2 * k
+        bag.write("/dvs/imu", msg, t=msg.header.stamp)
+        k += 1
+
+
 def main():
     seq_dir, out_dir, max_events, per_msg = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
     events = read_events(seq_dir, max_events, None)
@@ -126,6 +147,7 @@ def main():
             size = write_frames(bag, seq_dir, until)
             write_camera_info(bag, seq_dir, size)
             write_ground_truth(bag, seq_dir, until)
+            write_imu(bag, until)
             write_events(bag, read_events(seq_dir, 10**9, until), per_msg, size[0], size[1])
 
 
