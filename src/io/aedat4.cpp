@@ -149,14 +149,28 @@ Aedat4Reader::Aedat4Reader(const std::filesystem::path& file) : impl_(std::make_
 Aedat4Reader::~Aedat4Reader() = default;
 const std::string& Aedat4Reader::path() const { return impl_->file.path(); }
 const std::vector<Aedat4Stream>& Aedat4Reader::streams() const { return impl_->streams; }
-const std::string& Aedat4Reader::compression() const { return impl_->compression; }
 bool Aedat4Reader::next(Aedat4Packet& packet) { return impl_->next(packet); }
 void Aedat4Reader::seekPacket(std::uint64_t offset) { impl_->file.seek(offset); }
 void Aedat4Reader::rewind() { impl_->file.seek(impl_->data_start); }
 
+namespace {
+
+// The size the header gives the first event stream; stays 0 when there is none.
+void eventSensorSize(const Aedat4Reader& reader, int& width, int& height) {
+  for (const auto& s : reader.streams())
+    if (s.type == "EVTS") {
+      width = s.width;
+      height = s.height;
+      return;
+    }
+}
+
+}  // namespace
+
 Aedat4Counts scanAedat4(const std::filesystem::path& file) {
   Aedat4Reader reader(file);
   Aedat4Counts c;
+  eventSensorSize(reader, c.width, c.height);
   Aedat4Packet p;
   std::size_t n = 0;
   while (reader.next(p)) {
@@ -167,7 +181,6 @@ Aedat4Counts scanAedat4(const std::filesystem::path& file) {
       for (std::size_t i = 0; i < n; ++i) c.events_on += e.data()[i * kEventBytes + 12] != 0;
     } else if (p.type == "IMUS") {
       appendImu(root, c.imu_samples);
-      c.imu = c.imu_samples.size();
     } else if (p.type == "TRIG") {
       root.vector(0, kTriggerBytes, n);
       c.triggers += n;
@@ -207,12 +220,7 @@ cv::Mat readAedat4Frame(const std::filesystem::path& file, std::uint64_t packet_
 
 Aedat4EventSource::Aedat4EventSource(const std::filesystem::path& file)
     : reader_(std::make_unique<Aedat4Reader>(file)) {
-  for (const auto& s : reader_->streams())
-    if (s.type == "EVTS") {
-      width_ = s.width;
-      height_ = s.height;
-      break;
-    }
+  eventSensorSize(*reader_, width_, height_);
 }
 Aedat4EventSource::~Aedat4EventSource() = default;
 int Aedat4EventSource::width() const { return width_; }

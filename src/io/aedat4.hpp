@@ -42,7 +42,6 @@ class Aedat4Reader {
   ~Aedat4Reader();
   const std::string& path() const;
   const std::vector<Aedat4Stream>& streams() const;
-  const std::string& compression() const;
   bool next(Aedat4Packet& packet);
   void seekPacket(std::uint64_t offset);
   void rewind();
@@ -54,7 +53,8 @@ class Aedat4Reader {
 
 // Counts of a whole file, in one pass over its packets.
 struct Aedat4Counts {
-  std::uint64_t events = 0, events_on = 0, imu = 0, triggers = 0;
+  std::uint64_t events = 0, events_on = 0, triggers = 0;
+  int width = 0, height = 0;           // of the event stream, as the header gives it
   std::vector<ImuSample> imu_samples;  // DV's g and deg/s converted to m/s^2 and rad/s
   std::vector<Aedat4Frame> frames;
 };

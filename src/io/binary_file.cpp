@@ -44,17 +44,19 @@ std::size_t BinaryFile::readSome(void* dst, std::size_t n) {
   return got;
 }
 
-void BinaryFile::readExact(void* dst, std::size_t n, const char* what) {
+void BinaryFile::requireLeft(std::size_t n, const char* what) const {
   if (n > size_ - std::min(offset_, size_))
     throw error(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
-                std::to_string(size_ - offset_) + " left in the file");
+                std::to_string(size_ - std::min(offset_, size_)) + " left in the file");
+}
+
+void BinaryFile::readExact(void* dst, std::size_t n, const char* what) {
+  requireLeft(n, what);
   if (readSome(dst, n) != n) throw error(std::string("truncated: ") + what);
 }
 
 void BinaryFile::readExact(std::vector<std::uint8_t>& dst, std::size_t n, const char* what) {
-  if (n > size_ - std::min(offset_, size_))
-    throw error(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
-                std::to_string(size_ - offset_) + " left in the file");
+  requireLeft(n, what);
   dst.resize(n);
   readExact(dst.data(), n, what);
 }

@@ -53,6 +53,9 @@ class BinaryFile {
   InputError error(const std::string& what) const { return errorAt(path_, offset_, what); }
 
  private:
+  // Throws "truncated" naming `what` when fewer than n bytes are left.
+  void requireLeft(std::size_t n, const char* what) const;
+
   std::string path_;
   std::FILE* file_ = nullptr;
   std::uint64_t size_ = 0;

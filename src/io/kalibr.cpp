@@ -175,7 +175,8 @@ KalibrCamera readKalibrCamera(const std::string& path, const std::string& camera
 KalibrCamera readDsecCamera(const std::string& path, const std::string& camera) {
   const YAML::Node root = loadFile(path);
   const YAML::Node intrinsics = root["intrinsics"];
-  if (!intrinsics || !intrinsics.IsMap()) throw InputError(path, "not a DSEC cam_to_cam.yaml (no intrinsics map)");
+  if (!intrinsics || !intrinsics.IsMap())
+    throw InputError(path, "not a DSEC cam_to_cam.yaml (no intrinsics map)");
   const YAML::Node node = intrinsics[camera];
   if (!node) throw InputError(path, "no camera '" + camera + "' under intrinsics");
   // DSEC names Kalibr's `intrinsics` list `camera_matrix`; the rest is Kalibr's.

@@ -148,7 +148,7 @@ PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
   BinaryFile in(file);
   PropheseeHeader h;
   bool have_format = false;
-  std::string line, plugin, integrator;
+  std::string line, plugin;
   std::size_t line_no = 0;
   while (!in.atEnd()) {
     const std::uint64_t start = in.offset();
@@ -174,14 +174,11 @@ PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
       std::sscanf(value.c_str(), "%dx%d", &h.width, &h.height);
     } else if (key == "plugin_name") {
       plugin = value;
-    } else if (key == "integrator_name") {
-      integrator = value;
     }
   }
   if (line_no == 0) throw InputError(file.string(), "not a Prophesee .raw file (no '% ' header)");
   if (!have_format)
     throw InputError(file.string(), "header names no event encoding ('% evt 3.0' or '% format EVT3')");
-  h.sensor = plugin.empty() ? integrator : plugin;
   if (h.width <= 0 || h.height <= 0) {
     h.width = h.height = 0;
     for (const auto& s : kKnownSensors)

@@ -71,7 +71,6 @@ class TimeOrder {
 struct PropheseeHeader {
   EvtFormat format = EvtFormat::kEvt3;
   int width = 0, height = 0;  // 0 when neither the header nor a known sensor gives them
-  std::string sensor;         // plugin or integrator name, as the header gives it
   std::uint64_t data_offset = 0;
 };
 

@@ -66,6 +66,34 @@ std::filesystem::path storageFileOf(const std::filesystem::path& dir) {
 
 }  // namespace
 
+std::optional<std::size_t> chooseTopic(const RosBagReader& bag, const std::vector<std::string>& types,
+                                       const std::string& wanted, const std::string& kind,
+                                       const char* option) {
+  const auto& topics = bag.topics();
+  std::vector<std::size_t> found;
+  std::string list;
+  for (std::size_t i = 0; i < topics.size(); ++i)
+    if (std::find(types.begin(), types.end(), topics[i].type) != types.end()) {
+      found.push_back(i);
+      list += (list.empty() ? "" : ", ") + topics[i].name + " (" + topics[i].type + ")";
+    }
+  if (!wanted.empty()) {
+    for (std::size_t i = 0; i < topics.size(); ++i) {
+      if (topics[i].name != wanted) continue;
+      if (std::find(found.begin(), found.end(), i) == found.end())
+        throw InputError(bag.path(), "topic " + wanted + " has type " + topics[i].type + ", not " + kind);
+      return i;
+    }
+    throw InputError(bag.path(), "no topic " + wanted + " (" + kind +
+                                     " topics: " + (list.empty() ? std::string("none") : list) + ")");
+  }
+  if (found.size() > 1)
+    throw InputError(bag.path(),
+                     "several " + kind + " topics: " + list + "; choose one with " + std::string(option));
+  if (found.empty()) return std::nullopt;
+  return found[0];
+}
+
 std::string normalizeRosType(const std::string& type) {
   const std::size_t p = type.find("/msg/");
   return p == std::string::npos ? type : type.substr(0, p) + "/" + type.substr(p + 5);

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,12 @@ enum class RosContainer { kNone, kRosBag1, kSqlite, kMcap };
 RosContainer detectRosContainer(const std::filesystem::path& path);
 // Opens any of the containers; InputError naming the path if it is none of them.
 std::unique_ptr<RosBagReader> openRosBag(const std::filesystem::path& path);
+
+// The topic whose type is one of `types`: `wanted` if given, else the only one; nullopt when the bag has
+// none. `kind` names the types in messages ("event"), `option` is the flag that chooses among several.
+std::optional<std::size_t> chooseTopic(const RosBagReader& bag, const std::vector<std::string>& types,
+                                       const std::string& wanted, const std::string& kind,
+                                       const char* option);
 
 // Normalizes a ROS 2 type name ("pkg/msg/Type") to the ROS 1 form ("pkg/Type").
 std::string normalizeRosType(const std::string& type);

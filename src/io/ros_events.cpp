@@ -9,43 +9,20 @@ namespace eds {
 
 namespace {
 
-constexpr const char* kEventTypes[] = {"dvs_msgs/EventArray", "prophesee_event_msgs/EventArray",
-                                       "event_camera_msgs/EventPacket"};
-
-std::string listEventTopics(const RosBagReader& bag) {
-  std::string list;
-  for (const RosTopic& t : bag.topics())
-    if (isEventTopicType(t.type)) list += (list.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
-  return list;
-}
+const std::vector<std::string> kEventTypes = {"dvs_msgs/EventArray", "prophesee_event_msgs/EventArray",
+                                              "event_camera_msgs/EventPacket"};
 
 }  // namespace
 
 bool isEventTopicType(const std::string& type) {
-  return std::any_of(std::begin(kEventTypes), std::end(kEventTypes),
-                     [&](const char* t) { return type == t; });
+  return std::find(kEventTypes.begin(), kEventTypes.end(), type) != kEventTypes.end();
 }
 
 std::size_t chooseEventTopic(const RosBagReader& bag, const std::string& wanted) {
-  const auto& topics = bag.topics();
-  if (!wanted.empty()) {
-    for (std::size_t i = 0; i < topics.size(); ++i) {
-      if (topics[i].name != wanted) continue;
-      if (!isEventTopicType(topics[i].type))
-        throw InputError(bag.path(),
-                         "topic " + wanted + " has type " + topics[i].type + ", which carries no events");
-      return i;
-    }
-    throw InputError(bag.path(), "no topic " + wanted + " (event topics: " + listEventTopics(bag) + ")");
-  }
-  std::vector<std::size_t> found;
-  for (std::size_t i = 0; i < topics.size(); ++i)
-    if (isEventTopicType(topics[i].type)) found.push_back(i);
-  if (found.size() == 1) return found[0];
-  if (found.empty())
+  const auto topic = chooseTopic(bag, kEventTypes, wanted, "event", "--events-topic");
+  if (!topic)
     throw InputError(bag.path(), "no event topic (dvs_msgs/EventArray or event_camera_msgs/EventPacket)");
-  throw InputError(bag.path(),
-                   "several event topics: " + listEventTopics(bag) + "; choose one with --events-topic");
+  return *topic;
 }
 
 struct RosEventSource::Impl {
@@ -55,8 +32,9 @@ struct RosEventSource::Impl {
   RosEventStats stats;
   Evt3Decoder evt3;
   TimeOrder order;
-  bool have_offset = false, sensor_time = false;
-  std::uint64_t message_index = 0;  // of the message in `pending`, for errors
+  bool have_offset = false;
+  std::vector<std::uint16_t> words;  // the payload, aligned for the decoder; reused across messages
+  std::uint64_t message_index = 0;   // of the message in `pending`, for errors
 
   Impl(const std::filesystem::path& path, const std::string& wanted)
       : bag(openRosBag(path)),
@@ -133,7 +111,7 @@ struct RosEventSource::Impl {
     if (p.big_endian) throw error("big-endian evt3 payload");
     if (p.events.size() % 2 != 0) throw error("evt3 payload of an odd number of bytes");
     const std::size_t first_trigger = stats.triggers.size();
-    std::vector<std::uint16_t> words(p.events.size() / 2);
+    words.resize(p.events.size() / 2);
     std::memcpy(words.data(), p.events.data(), p.events.size());
     try {
       evt3.decode(words.data(), words.size(), pending, stats.triggers);
@@ -144,7 +122,6 @@ struct RosEventSource::Impl {
       stats.sensor_offset = p.stamp - pending.t.front();
       have_offset = true;
     }
-    if (sensor_time) return;
     for (TimeNs& t : pending.t) t += stats.sensor_offset;
     for (std::size_t i = first_trigger; i < stats.triggers.size(); ++i)
       stats.triggers[i].t += stats.sensor_offset;
@@ -165,7 +142,6 @@ RosEventSource::~RosEventSource() = default;
 const RosTopic& RosEventSource::topic() const { return impl_->bag->topics()[impl_->topic]; }
 const char* RosEventSource::bagFormat() const { return impl_->bag->format(); }
 const RosEventStats& RosEventSource::stats() const { return impl_->stats; }
-void RosEventSource::keepSensorTime(bool keep) { impl_->sensor_time = keep; }
 
 bool RosEventSource::decodeNextBlock(EventArray& block) { return impl_->refill(block); }
 

@@ -38,8 +38,6 @@ class RosEventSource : public BlockEventSource {
   const char* bagFormat() const;
   const RosEventStats& stats() const;
   std::size_t triggersRead() const override { return stats().triggers.size(); }
-  // Events with the sensor's own times (EventPacket), as a decoder of that clock reports them.
-  void keepSensorTime(bool keep);
 
  private:
   bool decodeNextBlock(EventArray& block) override;

@@ -6,25 +6,23 @@ namespace eds {
 
 namespace {
 
-// The topic of one of `types`: `wanted` if given, else the only one (empty when there is none).
-std::string chooseTopic(const RosBagReader& bag, std::initializer_list<const char*> types,
-                        const std::string& wanted, const char* option) {
+// The name of the chosen topic of one of `types`; empty when the bag has none.
+std::string chooseTopicName(const RosBagReader& bag, const std::vector<std::string>& types,
+                            const std::string& wanted, const std::string& kind, const char* option) {
+  const auto topic = chooseTopic(bag, types, wanted, kind, option);
+  return topic ? bag.topics()[*topic].name : std::string();
+}
+
+// The only CameraInfo topic, or with several cameras the one beside the chosen image topic
+// (".../image_raw" -> ".../camera_info"); empty otherwise, so a calibration must come from elsewhere.
+std::string cameraInfoTopic(const RosBagReader& bag, const std::string& image_topic) {
   std::vector<std::string> found;
   for (const RosTopic& t : bag.topics())
-    for (const char* type : types)
-      if (t.type == type) found.push_back(t.name);
-  if (!wanted.empty()) {
-    if (std::find(found.begin(), found.end(), wanted) == found.end())
-      throw InputError(bag.path(), "no topic " + wanted + " of type " + *types.begin());
-    return wanted;
-  }
-  if (found.size() > 1) {
-    std::string list;
-    for (const auto& f : found) list += (list.empty() ? "" : ", ") + f;
-    throw InputError(bag.path(), std::string("several ") + *types.begin() + " topics (" + list +
-                                     "); choose one with " + option);
-  }
-  return found.empty() ? std::string() : found[0];
+    if (t.type == "sensor_msgs/CameraInfo") found.push_back(t.name);
+  if (found.size() == 1) return found[0];
+  const std::size_t slash = image_topic.rfind('/');
+  const std::string beside = image_topic.substr(0, slash == std::string::npos ? 0 : slash) + "/camera_info";
+  return std::find(found.begin(), found.end(), beside) != found.end() ? beside : std::string();
 }
 
 StampedPose decodePose(RosMessageReader& r, bool transform) {
@@ -135,17 +133,16 @@ CameraModel decodeCameraInfo(RosMessageReader& r) {
 RosRecordingIndex indexRosRecording(const std::filesystem::path& path, const RosTopicChoice& choice) {
   auto bag = openRosBag(path);
   RosRecordingIndex idx;
-  idx.image_topic = chooseTopic(*bag, {"sensor_msgs/Image"}, choice.image, "--image-topic");
-  idx.gt_topic = chooseTopic(*bag, {"geometry_msgs/PoseStamped", "geometry_msgs/TransformStamped"},
-                             choice.ground_truth, "--gt-topic");
-  idx.camera_info_topic = chooseTopic(*bag, {"sensor_msgs/CameraInfo"}, "", "");
+  idx.image_topic = chooseTopicName(*bag, {"sensor_msgs/Image"}, choice.image, "image", "--image-topic");
+  idx.gt_topic = chooseTopicName(*bag, {"geometry_msgs/PoseStamped", "geometry_msgs/TransformStamped"},
+                                 choice.ground_truth, "ground-truth pose", "--gt-topic");
+  idx.camera_info_topic = cameraInfoTopic(*bag, idx.image_topic);
   RosMessage m;
   while (bag->next(m)) {
     const RosTopic& t = bag->topics()[m.topic];
     if (t.type == "sensor_msgs/Imu") {
       if (idx.imu_topic.empty()) idx.imu_topic = t.name;
       if (t.name != idx.imu_topic) continue;
-      ++idx.imu;
       RosMessageReader r(m.data, t.serialization);
       idx.imu_samples.push_back(decodeImu(r));
       continue;

@@ -32,7 +32,6 @@ struct RosRecordingIndex {
   std::vector<Frame> frames;
   std::optional<CameraModel> camera;  // from the first CameraInfo (plumb_bob / equidistant)
   Trajectory ground_truth;            // T_w_c, as the poses are written
-  std::uint64_t imu = 0;
   std::string imu_topic;
   std::vector<ImuSample> imu_samples;  // of the first sensor_msgs/Imu topic
 };

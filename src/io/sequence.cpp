@@ -246,11 +246,10 @@ void Sequence::openRecordingFile(const fs::path& file) {
   events_file_ = file;
   if (looksLikeAedat4(file)) {
     const Aedat4Counts counts = scanAedat4(file);
-    const Aedat4EventSource events(file);
     event_storage_ = EventStorage::kAedat4;
     format_ = "AEDAT 4.0";
-    width_ = events.width();
-    height_ = events.height();
+    width_ = counts.width;
+    height_ = counts.height;
     imu_ = counts.imu_samples;
     for (const Aedat4Frame& f : counts.frames) {
       if (!frames_.empty() && f.t <= frames_.back().t)

@@ -15,6 +15,7 @@
 #include "io/aedat4.hpp"
 #include "io/ecd_events.hpp"
 #include "io/prophesee.hpp"
+#include "io/read_events.hpp"
 #include "io/ros_bag.hpp"
 #include "io/ros_events.hpp"
 #include "io/sequence.hpp"
@@ -26,16 +27,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr std::size_t kEvents = 60000;
-
-EventArray readAll(EventSource& src) {
-  EventArray all, part;
-  while (true) {
-    part.clear();
-    if (src.read(part, 4096) == 0) break;
-    appendRange(all, part, 0, part.size());
-  }
-  return all;
-}
 
 bool pythonRosbagAvailable() {
   return std::system("/usr/bin/python3 -c 'import rosbag, genpy, roslz4' > /dev/null 2>&1") == 0;
@@ -84,12 +75,12 @@ void expectReadError(const std::function<void()>& read, const fs::path& named, c
 
 void readBag(const fs::path& path, const std::string& topic = "") {
   RosEventSource src(path, topic);
-  readAll(src);
+  test::readAll(src, 4096);
 }
 
 void readRaw(const fs::path& path, PropheseeOptions o = {}) {
   PropheseeRawSource src(path, o);
-  readAll(src);
+  test::readAll(src, 4096);
 }
 
 TEST(WrittenBags, EveryChunkCompressionGivesExactlyTheTextEvents) {
@@ -103,7 +94,7 @@ TEST(WrittenBags, EveryChunkCompressionGivesExactlyTheTextEvents) {
     EXPECT_EQ(src.topic().name, "/dvs/events");
     EXPECT_EQ(src.topic().type, "dvs_msgs/EventArray");
     EXPECT_EQ(src.topic().messages, kEvents / 2500);
-    const EventArray got = readAll(src);
+    const EventArray got = test::readAll(src, 4096);
     ASSERT_EQ(got.size(), kEvents);
     EXPECT_EQ(got.t, expected.t);
     EXPECT_EQ(got.x, expected.x);
@@ -168,7 +159,7 @@ TEST(BadRecordings, DamagedEvtFilesNameTheFileAndByte) {
   {
     const fs::path f = writeBytes(out / "good.raw", raw(header, good));
     PropheseeRawSource src(f);
-    const EventArray e = readAll(src);
+    const EventArray e = test::readAll(src, 4096);
     ASSERT_EQ(e.size(), 1u);
     EXPECT_EQ(e.t[0], (5 << 12) * 1000);
     EXPECT_EQ(e.x[0], 7);
@@ -205,7 +196,7 @@ TEST(BadRecordings, EvtPixelsOutsideAGivenResolutionAreRefused) {
 
 void readAedat(const fs::path& path) {
   Aedat4EventSource src(path);
-  readAll(src);
+  test::readAll(src, 4096);
   scanAedat4(path);
 }
 
@@ -378,7 +369,7 @@ TEST(BadRecordings, UnknownChunkCompressionAndAnUnindexedBag) {
   std::fill(at + 10, at + 18, 0);
   const fs::path unindexed = writeBytes(out / "unindexed.bag", plain);
   RosEventSource a(unindexed), b(dir / "events_none.bag");
-  const EventArray ea = readAll(a), eb = readAll(b);
+  const EventArray ea = test::readAll(a, 4096), eb = test::readAll(b, 4096);
   EXPECT_EQ(ea.size(), kEvents);
   EXPECT_EQ(ea.t, eb.t);
 }
@@ -508,6 +499,41 @@ TEST(WrittenBags, FramesCalibrationGroundTruthAndImuComeOutAsWritten) {
     EXPECT_EQ(s.acc[1], 9.81);
     EXPECT_EQ(s.acc[2], -0.2 * static_cast<double>(k));
   }
+}
+
+// A stereo bag (two event, image and CameraInfo topics): the options choose the camera, each stream
+// comes from the chosen one, and without a choice the error lists the topics to choose from.
+TEST(WrittenBags, StereoBagReadsTheChosenCamera) {
+  EDS_REQUIRE_WRITTEN_BAGS(dir);
+  const fs::path out = test::tempDir("stereo_bag");
+  const fs::path esim = test::sharedDataDir() / "esim_poster6dof_planar";
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --stereo " +
+                          esim.string() + " " + out.string() + " 0.2";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const fs::path bag = out / "stereo.bag";
+  expectReadError([&] { Sequence s(bag); }, bag,
+                  "several event topics: /davis/left/events (dvs_msgs/EventArray), /davis/right/events "
+                  "(dvs_msgs/EventArray); choose one with --events-topic");
+  expectReadError([&] { Sequence s(bag, {.events_topic = "/davis/left/events"}); }, bag,
+                  "several image topics: /davis/left/image_raw (sensor_msgs/Image), /davis/right/image_raw "
+                  "(sensor_msgs/Image); choose one with --image-topic");
+  expectReadError([&] { Sequence s(bag, {.events_topic = "/davis/left/image_raw"}); }, bag,
+                  "topic /davis/left/image_raw has type sensor_msgs/Image, not event");
+  const Sequence folder(esim);
+  const Sequence left(bag, {.events_topic = "/davis/left/events", .image_topic = "/davis/left/image_raw"});
+  const Sequence right(bag, {.events_topic = "/davis/right/events", .image_topic = "/davis/right/image_raw"});
+  EXPECT_EQ(left.camera().fx, folder.camera().fx);
+  EXPECT_EQ(right.camera().fx, folder.camera().fx + 10.0);
+  const EventArray el = test::readAll(*left.openEvents(), 4096), er = test::readAll(*right.openEvents(), 4096);
+  ASSERT_GT(el.size(), 1000u);
+  ASSERT_EQ(er.size(), (el.size() + 1) / 2);
+  for (std::size_t i = 0; i < er.size(); ++i) ASSERT_EQ(er.t[i], el.t[2 * i]) << i;
+  ASSERT_EQ(left.frames().size(), right.frames().size());
+  const cv::Mat fl = left.loadFrame(2), fr = right.loadFrame(2);
+  cv::Mat sum;
+  cv::add(fl, fr, sum, cv::noArray(), CV_32S);
+  EXPECT_EQ(cv::countNonZero(sum != 255), 0);  // the right image is the left one inverted
+  EXPECT_GT(cv::countNonZero(fl != fr), fl.total() / 2);
 }
 
 }  // namespace

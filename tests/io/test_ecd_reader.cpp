@@ -8,19 +8,13 @@
 #include "io/ecd_events.hpp"
 #include "io/hdf5_events.hpp"
 #include "io/merged_stream.hpp"
+#include "io/read_events.hpp"
 #include "io/sequence.hpp"
 #include "io/sequence_stats.hpp"
 #include "test_data.hpp"
 
 namespace eds {
 namespace {
-
-EventArray readAll(EventSource& src, std::size_t chunk = 100'000) {
-  EventArray all;
-  while (src.read(all, chunk) > 0) {
-  }
-  return all;
-}
 
 void writeText(const std::filesystem::path& file, const std::string& content) {
   std::ofstream(file, std::ios::binary) << content;
@@ -62,7 +56,7 @@ TEST(EcdEvents, GzipGivesTheSameEventsAsPlainText) {
   gzwrite(gz, content.data(), static_cast<unsigned>(content.size()));
   gzclose(gz);
   EcdEventSource plain(dir / "events.txt"), zipped(dir / "events.txt.gz");
-  const EventArray a = readAll(plain, 777), b = readAll(zipped, 1000);
+  const EventArray a = test::readAll(plain, 777), b = test::readAll(zipped, 1000);
   ASSERT_EQ(a.size(), 20000u);
   EXPECT_EQ(a.t, b.t);
   EXPECT_EQ(a.x, b.x);
@@ -169,7 +163,9 @@ TEST(MergedStream, EventsNeverPassTheNextFrame) {
       EXPECT_LE(chunk.size(), 64u);
       // After frame k only events later than it; an event at a frame's exact time precedes the frame.
       EXPECT_GT(chunk.t.front(), last_frame);
-      if (frames < seq.frames().size()) EXPECT_LE(chunk.t.back(), seq.frames()[frames].t);
+      if (frames < seq.frames().size()) {
+        EXPECT_LE(chunk.t.back(), seq.frames()[frames].t);
+      }
       events += chunk.size();
     }
   }

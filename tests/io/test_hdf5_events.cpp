@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "io/hdf5_events.hpp"
+#include "io/read_events.hpp"
 #include "test_data.hpp"
 
 namespace eds {
@@ -55,13 +56,6 @@ EventArray makeEvents(std::size_t n, std::uint32_t seed, TimeNs t0 = 0) {
                  (rng() & 1) ? 1 : -1);
   }
   return ev;
-}
-
-EventArray readAll(Hdf5EventSource& src, std::size_t chunk) {
-  EventArray out;
-  while (src.read(out, chunk) > 0) {
-  }
-  return out;
 }
 
 void expectEqual(const EventArray& a, const EventArray& b) {
@@ -115,7 +109,7 @@ void expectInputError(const std::function<void()>& fn, const std::string& file, 
 
 void readFile(const std::string& path, Hdf5EventOptions opt = {}) {
   Hdf5EventSource src(path, opt);
-  readAll(src, 3);
+  test::readAll(src, 3);
 }
 
 unsigned firstFilter(const std::string& path, const char* dataset) {
@@ -181,7 +175,7 @@ TEST(Hdf5Events, TimeOffsetIsAdded) {
   writeHdf5Events(path, ev, kOffsetUs);
   Hdf5EventSource src(path);
   EXPECT_EQ(src.tOffsetNs(), kOffsetUs * 1000);
-  expectEqual(readAll(src, 1000), ev);
+  expectEqual(test::readAll(src, 1000), ev);
 
   // The stored values are relative to t_offset.
   const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -289,7 +283,7 @@ TEST(Hdf5Events, AcceptsOtherIntegerTypes) {
     raw.add("events/p", H5T_STD_I16LE, {-1, 1, 0, 1});
   }
   Hdf5EventSource src(path);
-  const EventArray out = readAll(src, 3);
+  const EventArray out = test::readAll(src, 3);
   EXPECT_EQ(out.t, (std::vector<TimeNs>{5000, 6000, 6000, 9000}));
   EXPECT_EQ(out.x, (std::vector<std::uint16_t>{0, 639, 65535, 2}));
   EXPECT_EQ(out.y, (std::vector<std::uint16_t>{1, 255, 3, 4}));
@@ -305,7 +299,7 @@ TEST(Hdf5Events, GzipRoundTrip) {
   EXPECT_EQ(writeHdf5Events(path, ev, 42, Hdf5Compression::kGzip), Hdf5Compression::kGzip);
   EXPECT_EQ(firstFilter(path, "events/t"), unsigned{H5Z_FILTER_DEFLATE});
   Hdf5EventSource src(path);
-  expectEqual(readAll(src, 100'000), ev);
+  expectEqual(test::readAll(src, 100'000), ev);
   checkSeeks(path, ev, true);
 }
 
@@ -319,7 +313,7 @@ TEST(Hdf5Events, BloscRoundTripThroughDebianPlugin) {
             Hdf5Compression::kBloscIfAvailable);
   EXPECT_EQ(firstFilter(path, "events/x"), 32001u);
   Hdf5EventSource src(path);
-  expectEqual(readAll(src, 65'536), ev);
+  expectEqual(test::readAll(src, 65'536), ev);
 }
 
 // ---- bad inputs: every error is an InputError naming the file ----

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "io/ecd_events.hpp"
+#include "io/read_events.hpp"
 #include "io/sequence.hpp"
 #include "test_data.hpp"
 
@@ -28,13 +29,6 @@ fs::path writtenLayouts() {
   return dir;
 }
 
-EventArray readAll(EventSource& src) {
-  EventArray all;
-  while (src.read(all, 30000) > 0) {
-  }
-  return all;
-}
-
 #define EDS_REQUIRE_LAYOUTS(dir)                                                                            \
   EDS_REQUIRE_SHARED(esim_, "esim_poster6dof_planar");                                                      \
   EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import h5py, numpy, PIL' > /dev/null 2>&1") == 0, \
@@ -45,7 +39,7 @@ EventArray readAll(EventSource& src) {
 // The text events up to kUntilS, with their times floored to `resolution_ns`.
 EventArray textEvents(TimeNs resolution_ns) {
   EcdEventSource text(test::sharedDataDir() / "esim_poster6dof_planar/events.txt.gz");
-  EventArray all = readAll(text), out;
+  EventArray all = test::readAll(text, 30000), out;
   for (std::size_t i = 0; i < all.size() && all.t[i] <= fromSeconds(kUntilS); ++i)
     out.push_back(all.t[i] / resolution_ns * resolution_ns, all.x[i], all.y[i], all.p[i]);
   return out;
@@ -67,7 +61,7 @@ TEST(Hdf5Layouts, MvsecAndM3edGiveTheTextFoldersEventsAndFrames) {
     EXPECT_EQ(seq.width(), 240);
     EXPECT_EQ(seq.height(), 180);
     const EventArray expected = textEvents(c.resolution_ns);
-    const EventArray got = readAll(*seq.openEvents());
+    const EventArray got = test::readAll(*seq.openEvents(), 30000);
     ASSERT_EQ(got.size(), expected.size());
     EXPECT_EQ(got.t, expected.t);
     EXPECT_EQ(got.x, expected.x);
@@ -93,7 +87,7 @@ TEST(Hdf5Layouts, MalformedMvsecArraysNameTheFileAndDataset) {
   const auto expectError = [](const fs::path& f, const std::string& phrase) {
     try {
       const Sequence seq(f);
-      readAll(*seq.openEvents());
+      test::readAll(*seq.openEvents(), 30000);
       ADD_FAILURE() << "no error for " << f;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(f.string()), std::string::npos) << e.what();

@@ -4,6 +4,7 @@ genpy generates from the message definitions: test input for eds's own bag reade
 code).
 
 usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S [COMPRESSION]]
+       write_bags.py --stereo SEQUENCE_DIR OUT_DIR UNTIL_S   (see write_stereo)
 writes OUT_DIR/events_{none,bz2,lz4}.bag (dvs_msgs/EventArray on /dvs/events); with UNTIL_S also
 OUT_DIR/recording.bag (lz4 unless COMPRESSION says otherwise): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
 calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
@@ -67,16 +68,16 @@ def read_events(seq_dir, max_events, until):
     return events
 
 
-def write_events(bag, events, per_msg, width, height):
+def write_events(bag, events, per_msg, width, height, topic="/dvs/events"):
     EventArray = CLASSES["dvs_msgs/EventArray"]
     for seq, i in enumerate(range(0, len(events), per_msg)):
         msg = EventArray(width=width, height=height, events=events[i:i + per_msg])
         msg.header.seq = seq
         msg.header.stamp = msg.events[-1].ts
-        bag.write("/dvs/events", msg, t=msg.header.stamp)
+        bag.write(topic, msg, t=msg.header.stamp)
 
 
-def write_frames(bag, seq_dir, until):
+def write_frames(bag, seq_dir, until, topic="/dvs/image_raw", invert=False):
     Image = CLASSES["sensor_msgs/Image"]
     size = None
     with open(seq_dir + "/images.txt") as f:
@@ -85,22 +86,24 @@ def write_frames(bag, seq_dir, until):
             if float(t) > until:
                 break
             img = PilImage.open(seq_dir + "/" + path).convert("L")
+            if invert:
+                img = img.point(lambda v: 255 - v)
             size = img.size
             msg = Image(height=img.size[1], width=img.size[0], encoding="mono8", is_bigendian=0,
                         step=img.size[0], data=img.tobytes())
             msg.header.seq, msg.header.stamp, msg.header.frame_id = seq, stamp(t), "dvs"
-            bag.write("/dvs/image_raw", msg, t=msg.header.stamp)
+            bag.write(topic, msg, t=msg.header.stamp)
     return size
 
 
-def write_camera_info(bag, seq_dir, size):
+def write_camera_info(bag, seq_dir, size, topic="/dvs/camera_info", fx_offset=0.0):
     CameraInfo = CLASSES["sensor_msgs/CameraInfo"]
     v = [float(x) for x in open(seq_dir + "/calib.txt").read().split()]
-    fx, fy, cx, cy, d = v[0], v[1], v[2], v[3], (v[4:] + [0.0] * 5)[:5]
+    fx, fy, cx, cy, d = v[0] + fx_offset, v[1], v[2], v[3], (v[4:] + [0.0] * 5)[:5]
     msg = CameraInfo(height=size[1], width=size[0], distortion_model="plumb_bob", D=d,
                      K=[fx, 0, cx, 0, fy, cy, 0, 0, 1], R=[1, 0, 0, 0, 1, 0, 0, 0, 1],
                      P=[fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0])
-    bag.write("/dvs/camera_info", msg, t=rospy.Time(0, 1))
+    bag.write(topic, msg, t=rospy.Time(0, 1))
 
 
 def write_ground_truth(bag, seq_dir, until):
@@ -133,7 +136,21 @@ def write_imu(bag, until):
         k += 1
 
 
+def write_stereo(seq_dir, out_dir, until):
+    """OUT_DIR/stereo.bag: two cameras as in the stereo DAVIS bags (/davis/left/..., /davis/right/...).
+    The right one is told apart: every second event, inverted images, fx larger by 10."""
+    events = read_events(seq_dir, 10**9, until)
+    with rosbag.Bag(f"{out_dir}/stereo.bag", "w", compression="lz4") as bag:
+        for side, invert, step, fx_offset in (("left", False, 1, 0.0), ("right", True, 2, 10.0)):
+            size = write_frames(bag, seq_dir, until, f"/davis/{side}/image_raw", invert)
+            write_camera_info(bag, seq_dir, size, f"/davis/{side}/camera_info", fx_offset)
+            write_events(bag, events[::step], 500, size[0], size[1], f"/davis/{side}/events")
+
+
 def main():
+    if sys.argv[1] == "--stereo":
+        write_stereo(sys.argv[2], sys.argv[3], float(sys.argv[4]))
+        return
     seq_dir, out_dir, max_events, per_msg = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
     events = read_events(seq_dir, max_events, None)
     for compression in ("none", "bz2", "lz4"):
