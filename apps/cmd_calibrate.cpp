@@ -4,12 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "commands.hpp"
+#include "io/output_file.hpp"
 #include "sim/writer.hpp"
 #include "system/lens_calibration.hpp"
 #include "system/odometry.hpp"
@@ -29,6 +29,8 @@ void runCalibrate(CalibrateArgs& a) {
   const Sequence seq(a.sequence);
   if (!seq.hasFrames())
     throw std::invalid_argument(a.sequence + ": lens calibration needs frames (images.txt)");
+  const std::filesystem::path out(a.out);
+  requireWritableDir(out);
   Trajectory T_w_c;
   if (!a.trajectory.empty()) {
     T_w_c = readTum(a.trajectory);
@@ -42,8 +44,6 @@ void runCalibrate(CalibrateArgs& a) {
   }
   const LensCalibrationReport rep = calibrateLens(seq, T_w_c, a.cfg);
   const LensRefineResult& r = rep.result;
-  const std::filesystem::path out(a.out);
-  std::filesystem::create_directories(out);
   sim::writeEcdCalib(out / "calib.txt", r.camera);
   Trajectory refined;
   for (std::size_t i = 0; i < r.T_w_c.size(); ++i)
@@ -73,7 +73,7 @@ void runCalibrate(CalibrateArgs& a) {
   j["k_sigma"] = r.k_sigma;
   const bool determined = std::isfinite(r.lens_sigma_px) && r.lens_sigma_px <= a.max_sigma_px;
   j["determined"] = determined;
-  std::ofstream(out / "calibration.json") << j.dump(2) << "\n";
+  writeTextFile(out / "calibration.json", j.dump(2) + "\n");
   std::printf("%zu of %zu frames posed; %zu tracks (mean length %.1f frames), %zu used, %zu observations\n",
               rep.posed_frames, rep.frames, rep.tracks, rep.mean_track_length, r.tracks_used, r.observations);
   std::printf("reprojection RMS: %.3f px with the given lens, %.3f px refined%s\n", r.rms_fixed_px,

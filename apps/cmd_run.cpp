@@ -12,6 +12,9 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "core/log.hpp"
+#include "interrupt.hpp"
+#include "io/output_file.hpp"
 #include "recording_options.hpp"
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
@@ -39,6 +42,7 @@ void runRun(RunArgs& a) {
     if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
   for (const std::string& kv : a.sets) setOdometryParameter(cfg, kv);
   if (a.frames_only) cfg.use_events = false;
+  requireWritableDir(a.out);
   // A progress bar on a terminal (stderr), nothing when it is a file or a pipe.
   ProgressFn bar;
   if (isatty(fileno(stderr))) {
@@ -52,7 +56,10 @@ void runRun(RunArgs& a) {
       std::fflush(stderr);
     };
   }
-  const OdometryResult r = runOdometry(seq, cfg, bar);
+  logf(LogLevel::kInfo, "running on %s (Ctrl-C finishes early and keeps the outputs so far)",
+       a.sequence.c_str());
+  const OdometryResult r = runOdometry(seq, cfg, bar, &listenForInterrupt());
+  if (r.interrupted && bar) std::fprintf(stderr, "\n");
   writeOdometryOutputs(a.out, r, cfg);
   saveOdometryConfig(std::filesystem::path(a.out) / "config_used.yaml", cfg);
   if (!r.initialized)
@@ -62,6 +69,9 @@ void runRun(RunArgs& a) {
         "initialized at %.2f s after %d frames; %zu poses, %zu keyframes, %zu map points, %zu failures\n",
         toSeconds(r.init_t - r.first_t), r.init_frames, r.frames.size(), r.keyframes.size(), r.map.size(),
         r.failures.size());
+  if (r.interrupted)
+    std::printf("interrupted at %.2f s of the sequence: the outputs hold what was computed until then\n",
+                toSeconds(r.interrupted_t - r.first_t));
   std::printf("%.2f s wall for %.2f s of sequence (real-time factor %.2f)\n", r.wall_s, r.sequence_s,
               r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
   if (cfg.use_events)

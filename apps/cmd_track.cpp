@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "io/output_file.hpp"
 #include "recording_options.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/track_only.hpp"
@@ -58,7 +59,7 @@ void runTrack(TrackArgs& a) {
   Sequence seq(a.sequence, a.recording.options());
   if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   const std::filesystem::path out(a.out);
-  std::filesystem::create_directories(out);
+  requireWritableDir(out);
   if (!a.reference.empty()) return runTrackReference(a, seq, out);
   if (a.debug_images) {
     a.cfg.debug_dir = out / "debug";

@@ -5,11 +5,13 @@
 #include <string>
 
 #include "commands.hpp"
+#include "interrupt.hpp"
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/version.hpp"
 
 int main(int argc, char** argv) {
+  eds::app::installInterruptHandlers();
   CLI::App app{"eds: Event-aided Direct Sparse Odometry"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "eds " + eds::versionString());
@@ -45,5 +47,5 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   }
-  return 0;
+  return eds::app::interrupted() ? 130 : 0;  // 128 + SIGINT, as a shell reports an interrupted program
 }

@@ -6,6 +6,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -21,6 +23,12 @@ inline bool dataRequired() {
 inline std::filesystem::path sharedDataDir() {
   if (const char* env = std::getenv("EDS_SHARED_DATA")) return env;
   return std::filesystem::path(EDS_SOURCE_DIR) / ".." / "shared" / "data";
+}
+
+// The whole content of a file (empty when it cannot be read).
+inline std::string fileText(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // A fresh, empty temporary folder for one test; removed when the test program exits (kept when

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
 
 #include "core/error.hpp"
+#include "io/output_file.hpp"
 
 namespace eds::eval {
 namespace {
@@ -165,10 +165,7 @@ nlohmann::json toJson(const AteResult& r) {
 void writeJson(const std::filesystem::path& file, const AteResult& r) { writeJson(file, toJson(r)); }
 
 void writeJson(const std::filesystem::path& file, const nlohmann::json& j) {
-  std::ofstream f(file);
-  if (!f) throw InputError(file.string(), "cannot open for writing");
-  f << j.dump(2) << "\n";
-  if (!f) throw InputError(file.string(), "write failed");
+  writeTextFile(file, j.dump(2) + "\n");
 }
 
 }  // namespace eds::eval

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "io/output_file.hpp"
 
 namespace eds {
 
@@ -15,7 +16,8 @@ static_assert(std::endian::native == std::endian::little, "PLY writer assumes a 
 void writePly(const std::filesystem::path& file, const PointCloud& cloud) {
   if (cloud.intensity.size() != cloud.xyz.size())
     throw std::invalid_argument("writePly: intensity and xyz differ in length");
-  std::ofstream out(file, std::ios::binary);
+  OutputFile target(file);
+  std::ofstream out(target.temporary(), std::ios::binary);
   if (!out) throw InputError(file.string(), "cannot open for writing");
   out << "ply\nformat binary_little_endian 1.0\ncomment written by eds\n"
       << "element vertex " << cloud.xyz.size() << "\n"
@@ -24,7 +26,9 @@ void writePly(const std::filesystem::path& file, const PointCloud& cloud) {
     float rec[4] = {cloud.xyz[i].x(), cloud.xyz[i].y(), cloud.xyz[i].z(), cloud.intensity[i]};
     out.write(reinterpret_cast<const char*>(rec), sizeof rec);
   }
+  out.close();
   if (!out) throw InputError(file.string(), "write failed");
+  target.commit();
 }
 
 PointCloud readPly(const std::filesystem::path& file) {

@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "io/line_reader.hpp"
+#include "io/output_file.hpp"
 #include "io/text_parse.hpp"
 
 namespace eds {
@@ -76,7 +77,8 @@ Trajectory readTum(const std::filesystem::path& file, bool allow_unsorted) {
 }
 
 void writeTum(const std::filesystem::path& file, const Trajectory& traj) {
-  std::FILE* f = std::fopen(file.string().c_str(), "w");
+  OutputFile out(file);
+  std::FILE* f = std::fopen(out.temporary().c_str(), "w");
   if (!f) throw InputError(file.string(), "cannot open for writing");
   std::fprintf(f, "# t tx ty tz qx qy qz qw (T_w_c, camera-to-world)\n");
   for (const StampedPose& s : traj) {
@@ -88,6 +90,7 @@ void writeTum(const std::filesystem::path& file, const Trajectory& traj) {
                  q.y(), q.z(), q.w());
   }
   if (std::fclose(f) != 0) throw InputError(file.string(), "write failed");
+  out.commit();
 }
 
 }  // namespace eds

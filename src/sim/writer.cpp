@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.hpp"
+#include "io/output_file.hpp"
 
 namespace eds::sim {
 
@@ -122,15 +123,18 @@ void EcdWriter::finish() {
 void writeEcdCalib(const fs::path& file, const CameraModel& c) {
   if (c.distortion == Distortion::kEquidistant)
     throw std::invalid_argument("calib.txt cannot hold an equidistant model; write a Kalibr camchain");
-  std::FILE* f = std::fopen(file.c_str(), "w");
+  OutputFile out(file);
+  std::FILE* f = std::fopen(out.temporary().c_str(), "w");
   if (!f) throw InputError(file.string(), "cannot open for writing");
   std::fprintf(f, "%.9f %.9f %.9f %.9f %.12g %.12g %.12g %.12g %.12g\n", c.fx, c.fy, c.cx, c.cy, c.k[0],
                c.k[1], c.k[2], c.k[3], c.k[4]);
-  std::fclose(f);
+  if (std::fclose(f) != 0) throw InputError(file.string(), "write failed");
+  out.commit();
 }
 
 void writeKalibrCamchain(const fs::path& file, const CameraModel& c) {
-  std::FILE* f = std::fopen(file.c_str(), "w");
+  OutputFile out(file);
+  std::FILE* f = std::fopen(out.temporary().c_str(), "w");
   if (!f) throw InputError(file.string(), "cannot open for writing");
   const int n = c.distortion == Distortion::kRadTan ? 5 : c.distortion == Distortion::kEquidistant ? 4 : 0;
   std::fprintf(f, "cam0:\n  camera_model: pinhole\n  intrinsics: [%.9f, %.9f, %.9f, %.9f]\n", c.fx, c.fy,
@@ -138,7 +142,8 @@ void writeKalibrCamchain(const fs::path& file, const CameraModel& c) {
   std::fprintf(f, "  distortion_model: %s\n  distortion_coeffs: [", toString(c.distortion));
   for (int i = 0; i < n; ++i) std::fprintf(f, i ? ", %.12g" : "%.12g", c.k[i]);
   std::fprintf(f, "]\n  resolution: [%d, %d]\n", c.width, c.height);
-  std::fclose(f);
+  if (std::fclose(f) != 0) throw InputError(file.string(), "write failed");
+  out.commit();
 }
 
 void writeGroundTruth(const fs::path& file, const Motion& motion, TimeNs t0, TimeNs t1, double rate_hz) {

@@ -7,6 +7,7 @@
 //
 // `Odometry` is the pipeline as a push API (events and frames as they arrive, results as they are
 // produced); `runOdometry` drives it from a recorded sequence.
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "backend/sliding_window.hpp"
+#include "core/reflect.hpp"
 #include "frontend/event_frame.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
@@ -24,7 +26,6 @@
 #include "mapping/epipolar_search.hpp"
 #include "system/backend_worker.hpp"
 #include "system/event_frontend.hpp"
-#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -42,7 +43,8 @@ struct FlowKeyframePolicyConfig {
   double lookahead_depth_ratio = 1.5;  // the flow part only where depths span this ratio (90th / 10th)
 };
 
-EDS_FIELDS(FlowKeyframePolicyConfig, flow_t, flow_rt, min_in_view, max_log_alpha, lookahead, lookahead_depth_ratio)
+EDS_FIELDS(FlowKeyframePolicyConfig, flow_t, flow_rt, min_in_view, max_log_alpha, lookahead,
+           lookahead_depth_ratio)
 
 // How the two input streams of `Odometry` are merged into one time order. Items are processed in time
 // order (a frame before an event frame of the same time). A frame waits until the events have passed
@@ -96,7 +98,10 @@ struct OdometryConfig {
   double duration_s = 0;  // 0: to the end
 };
 
-EDS_FIELDS(OdometryConfig, stream, bootstrap, frame_tracker, prior_levels, frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events, event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg, bootstrap_from_events, frame_rate, start_s, duration_s)
+EDS_FIELDS(OdometryConfig, stream, bootstrap, frame_tracker, prior_levels, frame_always_tries_cv, mapping,
+           backend, policy, threaded_backend, wait_for_keyframe, use_events, event_frame, events,
+           buffered_gate_translation, buffered_gate_rotation_deg, bootstrap_from_events, frame_rate, start_s,
+           duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;
@@ -136,6 +141,9 @@ struct OdometryResult {
   std::vector<int> window_points;                   // per keyframe, after the solve
   double wall_s = 0, sequence_s = 0;
   double peak_rss_mb = 0;
+  // Stopped on request before the end of the input (what was computed so far is in the result).
+  bool interrupted = false;
+  TimeNs interrupted_t = 0;  // the last input time fed
 };
 
 // A keyframe as the back-end published it (mapped and optimized once; later solves move it further).
@@ -202,9 +210,12 @@ class Odometry {
 };
 
 // `progress`, if given, is called now and then (at most every 0.1 s of sequence time) with the
-// sequence time done and the total, in seconds (the total is the frames' span).
+// sequence time done and the total, in seconds (the total is the frames' span). `stop`, if given, is
+// polled between chunks of input (from any thread, e.g. a signal handler): once true, no more input is
+// fed, the odometry finishes with what it has, and the result says `interrupted`.
 using ProgressFn = std::function<void(double done_s, double total_s)>;
-OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress = {});
+OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress = {},
+                           const std::atomic<bool>* stop = nullptr);
 
 // Frame indices to process: [start, start + duration) from the first frame, thinned to the frames
 // nearest a lower rate when frame_rate > 0.

@@ -4,17 +4,18 @@
 
 #include <algorithm>
 #include <charconv>
-#include <type_traits>
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/error.hpp"
 #include "core/reflect.hpp"
+#include "io/output_file.hpp"
 
 namespace eds {
 
@@ -34,7 +35,7 @@ class Collect {
   template <class T>
   void operator()(const char* name, T& field) {
     const std::string key = prefix_.empty() ? name : prefix_ + "." + name;
-    if constexpr (requires(Collect& c) { visitFields(c, field); }) {
+    if constexpr (requires(Collect & c) { visitFields(c, field); }) {
       Collect nested(out_, key);
       visitFields(nested, field);
     } else if constexpr (NamedEnum<T>) {
@@ -134,9 +135,9 @@ void saveOdometryConfig(const std::filesystem::path& file, const OdometryConfig&
     }
     node[parts.back()] = field.write();
   }
-  std::ofstream out(file);
-  if (!out) throw InputError(file.string(), "cannot open for writing");
+  std::ostringstream out;
   out << "# eds run: every parameter of this run (load with --config)\n" << root << "\n";
+  writeTextFile(file, out.str());
 }
 
 void copyOdometryParameter(const OdometryConfig& from, OdometryConfig& to, const std::string& key) {
@@ -152,11 +153,13 @@ void copyOdometryParameter(const OdometryConfig& from, OdometryConfig& to, const
 void setOdometryParameter(OdometryConfig& cfg, const std::string& assignment) {
   const std::size_t eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw std::invalid_argument("expected KEY=VALUE (for example backend.window=9), not '" + assignment + "'");
+    throw std::invalid_argument("expected KEY=VALUE (for example backend.window=9), not '" + assignment +
+                                "'");
   const std::string key = assignment.substr(0, eq), value = assignment.substr(eq + 1);
   auto f = fields(cfg);
   const auto it = f.find(key);
-  if (it == f.end()) throw std::invalid_argument("unknown parameter '" + key + "' (config_used.yaml lists them)");
+  if (it == f.end())
+    throw std::invalid_argument("unknown parameter '" + key + "' (config_used.yaml lists them)");
   try {
     it->second.read(YAML::Load(value));
   } catch (const YAML::Exception&) {

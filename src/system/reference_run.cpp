@@ -3,12 +3,13 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 #include <string>
 
 #include "core/error.hpp"
 #include "io/line_reader.hpp"
+#include "io/output_file.hpp"
 #include "io/sequence.hpp"
 #include "io/text_parse.hpp"
 #include "io/trajectory_io.hpp"
@@ -57,21 +58,20 @@ void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel
                              const std::vector<RetiredKeyframe>& keyframes) {
   const std::filesystem::path kdir = dir / "keyframes";
   std::filesystem::create_directories(kdir);
-  std::ofstream cam(kdir / "camera.txt");
-  if (!cam) throw InputError((kdir / "camera.txt").string(), "cannot open for writing");
+  std::ostringstream cam;
   cam.precision(17);
   cam << pinhole.fx << " " << pinhole.fy << " " << pinhole.cx << " " << pinhole.cy << "\n";
+  writeTextFile(kdir / "camera.txt", cam.str());
   Trajectory index;
   for (std::size_t i = 0; i < keyframes.size(); ++i) {
     const RetiredKeyframe& k = keyframes[i];
     index.push_back({k.t, k.T_w_kf});
-    if (!cv::imwrite(keyframeFile(kdir, i, "png").string(), k.image))
-      throw InputError(keyframeFile(kdir, i, "png").string(), "cannot write the image");
-    std::ofstream pts(keyframeFile(kdir, i, "txt"));
-    if (!pts) throw InputError(keyframeFile(kdir, i, "txt").string(), "cannot open for writing");
+    writeImageFile(keyframeFile(kdir, i, "png"), k.image);
+    std::ostringstream pts;
     pts << "# u v inv_depth (pixels of the undistorted image; inverse depth in map units)\n";
     pts.precision(9);
     for (const KeyframePoint& p : k.points) pts << p.u << " " << p.v << " " << p.inv_depth << "\n";
+    writeTextFile(keyframeFile(kdir, i, "txt"), pts.str());
   }
   writeTum(kdir / "index.txt", index);
 }

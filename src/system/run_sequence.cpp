@@ -2,13 +2,14 @@
 // into `Odometry` in time order, and the run's output files.
 #include <algorithm>
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "core/error.hpp"
 #include "io/merged_stream.hpp"
+#include "io/output_file.hpp"
 #include "io/ply.hpp"
 #include "system/odometry.hpp"
 #include "system/reference_run.hpp"
@@ -41,30 +42,38 @@ namespace {
 
 // Pushes the selected frames and the events up to t_end into the odometry in time order: each frame
 // right after the events up to its time stamp.
-void feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, TimeNs t_end, bool use_events,
-                  Odometry& odo, const std::function<void(TimeNs)>& report) {
+// Returns the last input time fed when `stop` ended the feeding early, nullopt at the end of the input.
+std::optional<TimeNs> feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, TimeNs t_end,
+                                   bool use_events, Odometry& odo, const std::function<void(TimeNs)>& report,
+                                   const std::atomic<bool>* stop) {
   MergedStream stream(seq, 1 << 16, use_events);
   EventArray chunk;
   std::size_t frame = 0, next = 0;  // next: the next selected frame (index into idx)
+  TimeNs fed = seq.frames()[idx.front()].t;
   for (auto kind = stream.next(chunk, frame); kind != MergedStream::Kind::kEnd;
        kind = stream.next(chunk, frame)) {
+    if (stop != nullptr && stop->load(std::memory_order_relaxed)) return fed;
     if (kind == MergedStream::Kind::kFrame) {
       if (next == idx.size() || idx[next] != frame) continue;
       ++next;
-      odo.addFrame(seq.frames()[frame].t, seq.loadFrame(frame));
-      report(seq.frames()[frame].t);
+      fed = seq.frames()[frame].t;
+      odo.addFrame(fed, seq.loadFrame(frame));
+      report(fed);
     } else {
       const auto end = std::upper_bound(chunk.t.begin(), chunk.t.end(), t_end) - chunk.t.begin();
       odo.addEvents(chunk, 0, static_cast<std::size_t>(end));
+      if (end > 0) fed = std::max(fed, chunk.t[static_cast<std::size_t>(end) - 1]);
       if (!chunk.empty()) report(chunk.t.back());
       if (static_cast<std::size_t>(end) < chunk.size() && next == idx.size()) break;  // past the range
     }
   }
+  return std::nullopt;
 }
 
 }  // namespace
 
-OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress) {
+OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress,
+                           const std::atomic<bool>* stop) {
   if (!seq.hasFrames())
     throw InputError(seq.framesSource().string(),
                      "the odometry needs frames (keyframes come from them); this " + seq.format() +
@@ -89,9 +98,14 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
     t_reported = t;
     progress(std::clamp(toSeconds(t - first_t), 0.0, total_s), total_s);
   };
-  feedSequence(seq, idx, t_end, cfg.use_events, odo, report);
-  if (progress) progress(total_s, total_s);
-  return odo.finish();
+  const std::optional<TimeNs> stopped_at = feedSequence(seq, idx, t_end, cfg.use_events, odo, report, stop);
+  if (progress && !stopped_at) progress(total_s, total_s);
+  OdometryResult r = odo.finish();
+  if (stopped_at) {
+    r.interrupted = true;
+    r.interrupted_t = *stopped_at;
+  }
+  return r;
 }
 
 void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
@@ -116,6 +130,8 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   nlohmann::json j;
   j["mode"] = cfg.use_events ? "run (events + frames)" : "run --frames-only";
   j["initialized"] = r.initialized;
+  j["interrupted"] = r.interrupted;
+  if (r.interrupted) j["interrupted_at_s"] = toSeconds(r.interrupted_t);
   j["initialization"] = {{"t", r.initialized ? toSeconds(r.init_t) : 0.0},
                          {"seconds_after_first_frame", r.initialized ? toSeconds(r.init_t - r.first_t) : 0.0},
                          {"frames_used", r.init_frames},
@@ -145,9 +161,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"points_per_keyframe", cfg.backend.points_per_keyframe},
                  {"marginalize", cfg.backend.marginalize},
                  {"threaded_backend", cfg.threaded_backend}};
-  std::ofstream out(dir / "summary.json");
-  if (!out) throw InputError((dir / "summary.json").string(), "cannot open for writing");
-  out << j.dump(2) << "\n";
+  writeTextFile(dir / "summary.json", j.dump(2) + "\n");
 }
 
 }  // namespace eds

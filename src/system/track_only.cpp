@@ -4,7 +4,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
@@ -12,6 +11,7 @@
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
 #include "frontend/event_packets.hpp"
+#include "io/output_file.hpp"
 #include "mapping/depth_fill.hpp"
 #include "system/run_stats.hpp"
 
@@ -326,9 +326,7 @@ void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult&
   for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
   j["failures"] = fails;
   for (const auto& [name, value] : config) j["config"][name] = value;
-  std::ofstream out(file);
-  if (!out) throw InputError(file.string(), "cannot open for writing");
-  out << j.dump(2) << "\n";
+  writeTextFile(file, j.dump(2) + "\n");
 }
 
 void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult& r,

@@ -52,16 +52,11 @@ const OdometryResult& feed(Odometry& odo, const Sequence& seq, const EventArray&
   return odo.finish();
 }
 
-std::string fileText(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 // Every output file but summary.json (wall times) compared byte by byte.
 void expectSameOutputs(const std::filesystem::path& a, const std::filesystem::path& b) {
   for (const char* name : {"trajectory_frames.txt", "trajectory_frames_live.txt", "trajectory_events.txt",
                            "trajectory_events_live.txt", "keyframes.txt", "map.ply"}) {
-    const std::string ta = fileText(a / name), tb = fileText(b / name);
+    const std::string ta = test::fileText(a / name), tb = test::fileText(b / name);
     EXPECT_FALSE(ta.empty()) << a / name;
     EXPECT_TRUE(ta == tb) << name << " differs between " << a << " and " << b;
   }
@@ -212,7 +207,7 @@ TEST(OdometryApi, LiveLoopExampleTracksEsimInRealTime) {
   const int rc =
       std::system((program.string() + " " + dir.string() + " > " + log.string() + " 2>&1").c_str());
   EXPECT_EQ(rc, 0);
-  std::istringstream lines(fileText(log));
+  std::istringstream lines(test::fileText(log));
   std::size_t event_poses = 0, keyframes = 0, init = 0, reported = 0;
   for (std::string line; std::getline(lines, line);) {
     event_poses += line.rfind("event pose", 0) == 0;
