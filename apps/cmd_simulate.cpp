@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "core/error.hpp"
@@ -24,7 +25,19 @@ struct SimulateArgs {
   double fps = 25, exposure = 0, render_hz = 0, max_px = 0.5;
   int supersample = 2;
   bool gzip = false, quantize = false, no_depth = false;
+  std::vector<std::string> frame_gains;  // FROM:TO:GAIN, seconds from the start
 };
+
+// "FROM:TO:GAIN" (seconds from the start of the sequence) as a frame fault.
+sim::FrameGain parseFrameGain(const std::string& text, TimeNs start) {
+  double from = 0, to = 0, gain = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf:%lf:%lf%c", &from, &to, &gain, &tail) != 3 || !(to > from) ||
+      !(gain >= 0))
+    throw std::invalid_argument("--frame-gain '" + text +
+                                "': expected FROM:TO:GAIN with FROM < TO, GAIN >= 0");
+  return {start + fromSeconds(from), start + fromSeconds(to), gain};
+}
 
 CameraModel makeCamera(const SimulateArgs& a) {
   if (!a.calib.empty()) {
@@ -95,6 +108,9 @@ void runSimulate(const SimulateArgs& a) {
 
   const std::filesystem::path out(a.out);
   sim::EcdWriter writer(out, a.gzip, !a.no_depth);
+  std::vector<sim::FrameGain> gains;
+  for (const std::string& g : a.frame_gains) gains.push_back(parseFrameGain(g, motion.start()));
+  writer.setFrameGains(std::move(gains));
   if (cam.distortion == Distortion::kEquidistant)
     sim::writeKalibrCamchain(out / "camchain.yaml", cam);
   else
@@ -146,6 +162,10 @@ void addSimulateCommand(CLI::App& app) {
   cmd->add_option("--hot-rate", a->hot_rate, "Hot pixel event rate, Hz")->capture_default_str();
   cmd->add_option("--fps", a->fps, "Frame rate (0: no frames)")->capture_default_str();
   cmd->add_option("--exposure", a->exposure, "Frame exposure time for motion blur, s")->capture_default_str();
+  cmd->add_option(
+      "--frame-gain", a->frame_gains,
+      "FROM:TO:GAIN: frames from FROM to TO s (from the start) exposed GAIN times, clipped (0.05: "
+      "covered lens; 4: blown out); the events are unaffected. Repeatable");
   cmd->add_option("--render-hz", a->render_hz, "Fixed render rate (0: adaptive)")->capture_default_str();
   cmd->add_option("--max-px-per-step", a->max_px, "Adaptive rendering: pixel motion per render")
       ->capture_default_str();

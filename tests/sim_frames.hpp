@@ -45,9 +45,11 @@ inline sim::SimConfig noisySimConfig(std::uint64_t seed) {
 // Writes a simulated sequence to `dir` in the ECD layout (plain-text events, no depth maps) with the
 // test camera and 200 Hz ground truth, as `eds simulate` does.
 inline void writeSimSequence(const std::filesystem::path& dir, const sim::Scene& scene,
-                             const sim::Motion& motion, const sim::SimConfig& sc) {
+                             const sim::Motion& motion, const sim::SimConfig& sc,
+                             std::vector<sim::FrameGain> frame_gains = {}) {
   const CameraModel cam = simCamera();
   sim::EcdWriter writer(dir, false, false);
+  writer.setFrameGains(std::move(frame_gains));
   sim::writeEcdCalib(dir / "calib.txt", cam);
   sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
   sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);

@@ -89,8 +89,11 @@ void EcdWriter::onEvents(const EventArray& events) {
 void EcdWriter::onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) {
   char name[64];
   std::snprintf(name, sizeof name, "frame_%08zu.png", frame_index_++);
+  double gain = 1.0;
+  for (const FrameGain& g : frame_gains_)
+    if (t >= g.t0 && t < g.t1) gain *= g.gain;
   cv::Mat img8;
-  intensity.convertTo(img8, CV_8U, 255.0);  // rounds and saturates
+  intensity.convertTo(img8, CV_8U, 255.0 * gain);  // rounds and saturates
   if (!cv::imwrite((dir_ / "images" / name).string(), img8))
     throw InputError((dir_ / "images" / name).string(), "cannot write image");
   if (write_depth_) {

@@ -10,6 +10,14 @@
 
 namespace eds::sim {
 
+// A fault of the frames only (the events see the true scene): frames with times in [t0, t1) have their
+// exposure scaled by `gain` and clipped, as a hand over the lens (gain 0.05) or a blown-out exposure
+// (gain 4) would leave them.
+struct FrameGain {
+  TimeNs t0 = 0, t1 = 0;
+  double gain = 1.0;
+};
+
 class EcdWriter : public SimSink {
  public:
   // Creates `dir` (and images/, depth/). Throws InputError if it cannot.
@@ -19,6 +27,7 @@ class EcdWriter : public SimSink {
   void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) override;
   // Flushes and closes the event file and images.txt; call once at the end.
   void finish();
+  void setFrameGains(std::vector<FrameGain> gains) { frame_gains_ = std::move(gains); }
 
  private:
   void flushText();
@@ -29,6 +38,7 @@ class EcdWriter : public SimSink {
   std::FILE* images_ = nullptr;
   std::vector<char> text_;
   std::size_t frame_index_ = 0;
+  std::vector<FrameGain> frame_gains_;
 };
 
 // calib.txt: `fx fy cx cy k1 k2 p1 p2 k3` (radtan or none only: the ECD line has no other model).

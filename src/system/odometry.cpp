@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <deque>
-#include <limits>
 #include <functional>
+#include <limits>
 #include <unordered_map>
 
 #include "core/error.hpp"
@@ -58,15 +58,21 @@ class Core {
       : cfg_(cfg),
         res_(res),
         und_(camera),
+        quality_(cfg.frame_quality),
         odo_(und_.pinhole(), cfg, res),
         boot_(und_.pinhole(), cfg.bootstrap),
         events_(und_.pinhole(), cfg.events) {}
 
   // A raw 8-bit frame.
   void frame(TimeNs t, const cv::Mat& raw) {
+    ++res_.frames_in;
+    if (std::string why = quality_.check(t, raw); !why.empty()) {
+      ++res_.frames_rejected;
+      res_.failures.push_back({t, "frame not used: " + why});
+      return;
+    }
     cv::Mat img;
     und_.undistortImage(raw).convertTo(img, CV_32F, 1.0 / 255.0);
-    ++res_.frames_in;
     last_t_ = t;
     if (!res_.initialized) {
       // The events' pose at this frame, tracked against the bootstrap's reference, seeds its alignment.
@@ -227,6 +233,7 @@ class Core {
   const OdometryConfig& cfg_;
   OdometryResult& res_;
   Undistorter und_;
+  FrameQualityGate quality_;
   FrameFrontend odo_;
   Bootstrap boot_;
   EventFrontend events_;
@@ -266,8 +273,8 @@ class Odometry::Impl {
     for (std::size_t i = begin; i < end; ++i) {
       if (ev.t[i] < prev)
         throw std::invalid_argument("Odometry::addEvents: event " + std::to_string(events_in_ + i - begin) +
-                                    " at t = " + std::to_string(ev.t[i]) + " ns is before the one before it (" +
-                                    std::to_string(prev) + " ns)");
+                                    " at t = " + std::to_string(ev.t[i]) +
+                                    " ns is before the one before it (" + std::to_string(prev) + " ns)");
       if (ev.x[i] >= w || ev.y[i] >= h || (ev.p[i] != 1 && ev.p[i] != -1))
         throw std::invalid_argument("Odometry::addEvents: event " + std::to_string(events_in_ + i - begin) +
                                     " at pixel (" + std::to_string(ev.x[i]) + ", " + std::to_string(ev.y[i]) +
@@ -280,7 +287,8 @@ class Odometry::Impl {
     for (std::size_t i = begin; i < end;) {
       // Appends no more than the next packet needs, so that every packet is built as soon as it can
       // be whatever the chunk size (the same event frames, in the same order).
-      const std::size_t need = pos_ + n_ + lookahead_ > buf_.size() ? pos_ + n_ + lookahead_ - buf_.size() : 1;
+      const std::size_t need =
+          pos_ + n_ + lookahead_ > buf_.size() ? pos_ + n_ + lookahead_ - buf_.size() : 1;
       const std::size_t k = std::min(end - i, need);
       append(ev, i, i + k);
       i += k;
@@ -347,7 +355,8 @@ class Odometry::Impl {
     if (camera.width <= 0 || camera.height <= 0)
       throw std::invalid_argument("Odometry: the camera's sensor size is unknown");
     if (!(cfg.stream.max_frame_wait_s >= 0) || cfg.stream.max_pending_frames < 0)
-      throw std::invalid_argument("Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
+      throw std::invalid_argument(
+          "Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
     return cfg;
   }
 
@@ -394,7 +403,8 @@ class Odometry::Impl {
         else
           processEventFrame();
       } else if (!frames_.empty()) {
-        const bool events_past = !cfg_.use_events || (pos_ < buf_.size() && buf_.t[pos_] >= frames_.front().t);
+        const bool events_past =
+            !cfg_.use_events || (pos_ < buf_.size() && buf_.t[pos_] >= frames_.front().t);
         if (!(at_end || events_past ||
               frames_.size() > static_cast<std::size_t>(cfg_.stream.max_pending_frames)))
           return;
@@ -446,7 +456,8 @@ class Odometry::Impl {
       listener_->onFramePose(res_.frames[told_frames_], res_.frame_anchors[told_frames_].kf_id);
     for (; told_events_ < res_.events.size(); ++told_events_)
       listener_->onEventPose(res_.events[told_events_], res_.event_anchors[told_events_].kf_id);
-    for (; told_failures_ < res_.failures.size(); ++told_failures_) listener_->onFailure(res_.failures[told_failures_]);
+    for (; told_failures_ < res_.failures.size(); ++told_failures_)
+      listener_->onFailure(res_.failures[told_failures_]);
   }
 
   Clock::time_point wall0_;

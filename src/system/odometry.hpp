@@ -18,6 +18,7 @@
 #include "backend/sliding_window.hpp"
 #include "core/reflect.hpp"
 #include "frontend/event_frame.hpp"
+#include "frontend/frame_quality.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "init/bootstrap.hpp"
@@ -63,6 +64,7 @@ EDS_FIELDS(StreamConfig, max_frame_wait_s, max_pending_frames)
 
 struct OdometryConfig {
   StreamConfig stream;
+  FrameQualityConfig frame_quality;
   BootstrapConfig bootstrap;
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1};
   int prior_levels = 2;  // pyramid levels of the frame alignment when the event pose seeds it
@@ -98,10 +100,10 @@ struct OdometryConfig {
   double duration_s = 0;  // 0: to the end
 };
 
-EDS_FIELDS(OdometryConfig, stream, bootstrap, frame_tracker, prior_levels, frame_always_tries_cv, mapping,
-           backend, policy, threaded_backend, wait_for_keyframe, use_events, event_frame, events,
-           buffered_gate_translation, buffered_gate_rotation_deg, bootstrap_from_events, frame_rate, start_s,
-           duration_s)
+EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
+           frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events,
+           event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg, bootstrap_from_events,
+           frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;
@@ -131,7 +133,8 @@ struct OdometryResult {
   CameraModel pinhole;
   std::vector<MapPoint> map;
   std::size_t frames_in = 0, tracked = 0;
-  std::size_t backend_waits = 0;  // times the tracking thread waited for the threaded back-end
+  std::size_t frames_rejected = 0;  // kept out by the frame quality check (each one also a failure)
+  std::size_t backend_waits = 0;    // times the tracking thread waited for the threaded back-end
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization
   TimeNs first_t = 0;  // first frame considered

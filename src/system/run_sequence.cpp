@@ -136,11 +136,17 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                          {"seconds_after_first_frame", r.initialized ? toSeconds(r.init_t - r.first_t) : 0.0},
                          {"frames_used", r.init_frames},
                          {"restarts", r.init_restarts}};
-  j["counts"] = {{"frames", r.frames_in},          {"poses", r.frames.size()},
-                 {"tracked", r.tracked},           {"failures", r.failures.size()},
-                 {"event_frames", r.event_frames}, {"event_frames_tracked", r.events_tracked},
-                 {"event_poses", r.events.size()}, {"keyframes", r.keyframes.size()},
-                 {"map_points", r.map.size()},     {"backend_waits", r.backend_waits}};
+  j["counts"] = {{"frames", r.frames_in},
+                 {"frames_rejected", r.frames_rejected},
+                 {"poses", r.frames.size()},
+                 {"tracked", r.tracked},
+                 {"failures", r.failures.size()},
+                 {"event_frames", r.event_frames},
+                 {"event_frames_tracked", r.events_tracked},
+                 {"event_poses", r.events.size()},
+                 {"keyframes", r.keyframes.size()},
+                 {"map_points", r.map.size()},
+                 {"backend_waits", r.backend_waits}};
   j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},
                      {"event_tracking", timingStats(r.event_track_ms)},
                      {"mapping", timingStats(r.mapping_ms)},

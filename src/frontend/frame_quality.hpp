@@ -1,0 +1,54 @@
+#pragma once
+// Frames the odometry must not trust: too dark, blown out, robbed of texture (a hand over the lens,
+// heavy blur) or a sudden exposure jump. Frames are not high-dynamic-range, events are: a frame that
+// fails here is kept out of tracking, keyframes and the map, and the events carry the pose meanwhile.
+// Measured on the raw 8-bit frame, absolutely and against the frames accepted just before it.
+#include <deque>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "core/reflect.hpp"
+#include "core/time.hpp"
+
+namespace eds {
+
+struct FrameQualityConfig {
+  bool enabled = true;
+  double max_saturated = 0.3;         // fraction of pixels at 250 or more
+  double max_dark = 0.7;              // fraction of pixels at 5 or less
+  double min_texture_ratio = 0.35;    // mean gradient against the median of the recent accepted frames
+  double max_brightness_ratio = 3.0;  // mean intensity jump, either way, against the same
+  int history = 15;                   // accepted frames the reference is the median of
+  // A new normal: after this long of frames refused only against the recent ones (none absolutely),
+  // the reference starts again from the current frames (a light switched off for good).
+  double relearn_after_s = 2.0;
+};
+
+EDS_FIELDS(FrameQualityConfig, enabled, max_saturated, max_dark, min_texture_ratio, max_brightness_ratio,
+           history, relearn_after_s)
+
+struct FrameStats {
+  double mean = 0;       // intensity, 0..255
+  double saturated = 0;  // fraction of pixels >= 250
+  double dark = 0;       // fraction of pixels <= 5
+  double texture = 0;    // mean |horizontal| + |vertical| neighbour difference
+};
+
+FrameStats measureFrame(const cv::Mat& gray8);
+
+class FrameQualityGate {
+ public:
+  explicit FrameQualityGate(const FrameQualityConfig& cfg) : cfg_(cfg) {}
+  // Empty when the frame at time t can be used (it then joins the reference); else why it cannot.
+  std::string check(TimeNs t, const cv::Mat& gray8);
+
+ private:
+  std::string absoluteProblem(const FrameStats& s) const;
+  std::string relativeProblem(const FrameStats& s) const;
+
+  FrameQualityConfig cfg_;
+  std::deque<FrameStats> accepted_;
+  TimeNs refused_since_ = -1;  // first of the current run of relative refusals
+};
+
+}  // namespace eds
