@@ -1,6 +1,9 @@
 #include "io/aedat4.hpp"
 
+#include <algorithm>
+#include <charconv>
 #include <cstring>
+#include <system_error>
 #include <opencv2/imgproc.hpp>
 
 #include "io/decompress.hpp"
@@ -15,7 +18,6 @@ constexpr char kMagic[] = "#!AER-DAT4.0\r\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEventBytes = 16;   // struct Event { int64 t; int16 x, y; bool on; } padded
 constexpr std::size_t kTriggerBytes = 4;  // triggers are tables: a vector of offsets
-constexpr TimeNs kNsPerUs = 1000;
 
 // The value of `<attr key="KEY" ...>VALUE</attr>` within text.
 std::string xmlAttr(const std::string& text, const std::string& key) {
@@ -27,6 +29,13 @@ std::string xmlAttr(const std::string& text, const std::string& key) {
              : text.substr(open + 1, close - open - 1);
 }
 
+// A non-negative int written in decimal; -1 when the text is anything else (or too large).
+int smallInt(const std::string& text) {
+  int v = -1;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  return ec == std::errc() && end == text.data() + text.size() && v >= 0 ? v : -1;
+}
+
 // The output streams the XML names: <node name="N" path=".../outInfo/N/"> ... </node>.
 std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
   std::vector<Aedat4Stream> streams;
@@ -34,15 +43,15 @@ std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
        p = xml.find("<node name=\"", p + 1)) {
     const std::size_t name_end = xml.find('"', p + 12);
     const std::string name = xml.substr(p + 12, name_end - p - 12);
-    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    if (smallInt(name) < 0) continue;
     const std::size_t end = xml.find("</node>", p);
     const std::string body = xml.substr(p, end == std::string::npos ? std::string::npos : end - p);
     Aedat4Stream s;
-    s.id = std::stoi(name);
+    s.id = smallInt(name);
     s.type = xmlAttr(body, "typeIdentifier");
-    const std::string w = xmlAttr(body, "sizeX"), h = xmlAttr(body, "sizeY");
-    s.width = w.empty() ? 0 : std::atoi(w.c_str());
-    s.height = h.empty() ? 0 : std::atoi(h.c_str());
+    // A size that is not a number leaves it unknown (0), as an absent one does.
+    s.width = std::max(smallInt(xmlAttr(body, "sizeX")), 0);
+    s.height = std::max(smallInt(xmlAttr(body, "sizeY")), 0);
     streams.push_back(s);
   }
   return streams;
@@ -50,11 +59,19 @@ std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
 
 // DV's IMU samples are tables: timestamp (int64 µs), temperature, accelerometer xyz (g), gyroscope xyz
 // (deg/s), magnetometer xyz (floats).
-void appendImu(const FlatTable& packet, std::vector<ImuSample>& out) {
+// A packet's time in µs as ns; an error naming the packet when it is beyond int64 ns.
+TimeNs packetTimeNs(std::int64_t us, const std::string& file, std::uint64_t packet_offset, const char* what) {
+  if (!microsecondsFitNs(us))
+    throw errorAt(file, packet_offset, std::string(what) + " time " + std::to_string(us) + " us is beyond int64 ns");
+  return us * kNsPerUs;
+}
+
+void appendImu(const FlatTable& packet, const std::string& file, std::uint64_t packet_offset,
+               std::vector<ImuSample>& out) {
   constexpr double kG = 9.80665, kDegToRad = 3.14159265358979323846 / 180.0;
   for (const FlatTable& imu : packet.tables(0)) {
     ImuSample s;
-    s.t = imu.scalar<std::int64_t>(0, 0) * kNsPerUs;
+    s.t = packetTimeNs(imu.scalar<std::int64_t>(0, 0), file, packet_offset, "IMU sample");
     for (int k = 0; k < 3; ++k) {
       s.acc[k] = imu.scalar<float>(2 + k, 0.0f) * kG;
       s.gyro[k] = imu.scalar<float>(5 + k, 0.0f) * kDegToRad;
@@ -180,12 +197,12 @@ Aedat4Counts scanAedat4(const std::filesystem::path& file) {
       c.events += n;
       for (std::size_t i = 0; i < n; ++i) c.events_on += e.data()[i * kEventBytes + 12] != 0;
     } else if (p.type == "IMUS") {
-      appendImu(root, c.imu_samples);
+      appendImu(root, reader.path(), p.offset, c.imu_samples);
     } else if (p.type == "TRIG") {
       root.vector(0, kTriggerBytes, n);
       c.triggers += n;
     } else if (p.type == "FRME") {
-      c.frames.push_back({root.scalar<std::int64_t>(0, 0) * kNsPerUs, p.offset});
+      c.frames.push_back({packetTimeNs(root.scalar<std::int64_t>(0, 0), reader.path(), p.offset, "frame"), p.offset});
     }
   }
   return c;
@@ -249,6 +266,10 @@ bool Aedat4EventSource::decodeNextBlock(EventArray& block) {
                     "event " + std::to_string(i) + " of the packet at pixel (" + std::to_string(xy[0]) +
                         ", " + std::to_string(xy[1]) + ") outside the " + std::to_string(width_) + "x" +
                         std::to_string(height_) + " sensor");
+    if (!microsecondsFitNs(t))
+      throw errorAt(reader_->path(), p.offset,
+                    "event " + std::to_string(i) + " of the packet has time " + std::to_string(t) +
+                        " us, beyond what int64 ns holds");
     if (t * kNsPerUs < last_t_)
       throw errorAt(reader_->path(), p.offset,
                     "events out of order: event " + std::to_string(i) + " of the packet at " +

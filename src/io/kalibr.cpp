@@ -179,6 +179,7 @@ KalibrCamera readDsecCamera(const std::string& path, const std::string& camera) 
     throw InputError(path, "not a DSEC cam_to_cam.yaml (no intrinsics map)");
   const YAML::Node node = intrinsics[camera];
   if (!node) throw InputError(path, "no camera '" + camera + "' under intrinsics");
+  if (!node.IsMap()) throw InputError(path, lineOf(node.Mark()), "camera '" + camera + "' is not a map");
   // DSEC names Kalibr's `intrinsics` list `camera_matrix`; the rest is Kalibr's.
   YAML::Node kalibr = YAML::Clone(node);
   if (kalibr["camera_matrix"]) kalibr["intrinsics"] = kalibr["camera_matrix"];

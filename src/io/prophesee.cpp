@@ -10,7 +10,6 @@ namespace eds {
 
 namespace {
 
-constexpr TimeNs kNsPerUs = 1000;
 constexpr std::uint64_t kEvt3HighRange = 1u << 12;  // TIME_HIGH counts 12 bits, then wraps
 
 // Sensor sizes of the Metavision plugins whose headers give none.
@@ -159,6 +158,7 @@ PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
     in.readLine(line, 4096);
     ++line_no;
     if (line == "% end") break;
+    if (line.size() < 2) continue;  // a bare '%'
     const std::size_t sp = line.find(' ', 2);
     const std::string key = line.substr(2, sp == std::string::npos ? std::string::npos : sp - 2);
     const std::string value = sp == std::string::npos ? "" : line.substr(sp + 1);

@@ -90,7 +90,8 @@ inline const char* parseEcdLineFast(const char* p, TimeNs& t, std::int32_t& x, s
     sec = sec * 10 + (*p++ - '0');
     if (++nd > 10) return nullptr;
   }
-  if (nd == 0 || *p != '.') return nullptr;
+  // Beyond int64 ns (year 2262): left to the careful parser, which names the problem.
+  if (nd == 0 || *p != '.' || sec > INT64_MAX / kNsPerSec - 1) return nullptr;
   ++p;
   std::uint64_t w;
   std::memcpy(&w, p, 8);
@@ -98,12 +99,12 @@ inline const char* parseEcdLineFast(const char* p, TimeNs& t, std::int32_t& x, s
   const std::int64_t frac = static_cast<std::int64_t>(parse8Digits(w)) * 10 + (p[8] - '0');
   p += 10;
   std::int32_t v = 0;
-  for (nd = 0; isDigit(*p); ++nd) v = v * 10 + (*p++ - '0');
+  for (nd = 0; isDigit(*p) && nd <= 5; ++nd) v = v * 10 + (*p++ - '0');
   if (nd == 0 || nd > 5 || *p != ' ') return nullptr;
   x = v;
   ++p;
   v = 0;
-  for (nd = 0; isDigit(*p); ++nd) v = v * 10 + (*p++ - '0');
+  for (nd = 0; isDigit(*p) && nd <= 5; ++nd) v = v * 10 + (*p++ - '0');
   if (nd == 0 || nd > 5 || *p != ' ') return nullptr;
   y = v;
   ++p;

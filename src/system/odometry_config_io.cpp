@@ -104,7 +104,11 @@ void loadOdometryConfig(const std::filesystem::path& file, OdometryConfig& cfg) 
   if (root.IsNull()) return;
   if (!root.IsMap()) throw InputError(file.string(), "expected a map of parameters");
   std::map<std::string, YAML::Node> leaves;
-  flatten(root, "", leaves);
+  try {
+    flatten(root, "", leaves);
+  } catch (const YAML::Exception& e) {  // a key that is not a name (a list, a map)
+    throw InputError(file.string(), "line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
   auto f = fields(cfg);
   for (const auto& [key, node] : leaves) {
     const auto it = f.find(key);

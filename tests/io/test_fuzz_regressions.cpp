@@ -1,0 +1,88 @@
+// Inputs the fuzz targets (fuzz/, scripts/fuzz) found to crash a reader or overflow a number, each
+// reduced to what triggers it: now an InputError naming the file (and line), or read correctly.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "io/ecd_events.hpp"
+#include "io/kalibr.hpp"
+#include "io/prophesee.hpp"
+#include "io/read_events.hpp"
+#include "system/odometry_config_io.hpp"
+#include "test_data.hpp"
+
+namespace eds {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path write(const std::string& name, const std::string& content) {
+  const fs::path p = test::tempDir("fuzz_regressions_" + name) / name;
+  std::ofstream(p, std::ios::binary) << content;
+  return p;
+}
+
+template <typename F>
+void expectInputError(F&& f, const fs::path& file, const std::string& fragment) {
+  try {
+    f();
+    ADD_FAILURE() << "no error for " << file;
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(file.string()), std::string::npos) << what;
+    EXPECT_NE(what.find(fragment), std::string::npos) << what;
+  }
+}
+
+// A pixel coordinate of 11 digits overflowed the fast line parser's int.
+TEST(FuzzRegressions, EcdPixelOfElevenDigits) {
+  const fs::path f = write("events.txt", "0.000001000 10 20 1\n0.000002000 10200005001 1 0\n");
+  expectInputError(
+      [&] {
+        EcdEventSource src(f);
+        test::readAll(src, 1000);
+      },
+      f, ":2");
+}
+
+// Seconds beyond what int64 ns holds overflowed the fast parser's time.
+TEST(FuzzRegressions, EcdTimeBeyondInt64Nanoseconds) {
+  const fs::path f = write("events.txt", "9999999999.000000000 1 1 1\n");
+  expectInputError(
+      [&] {
+        EcdEventSource src(f);
+        test::readAll(src, 1000);
+      },
+      f, ":1");
+}
+
+// A header line that is a bare '%' read past the line's end.
+TEST(FuzzRegressions, PropheseeHeaderLineOfOnePercentSign) {
+  std::string raw = "% evt 3.0\n%\n% format EVT3;height=720;width=1280\n% end\n";
+  for (const std::uint16_t w : {0x8000, 0x6010, 0x0005, 0x2000 | 0x800 | 10})
+    raw.append(reinterpret_cast<const char*>(&w), 2);
+  const fs::path f = write("bare.raw", raw);
+  const PropheseeHeader h = readPropheseeHeader(f);
+  EXPECT_EQ(h.width, 1280);
+  EXPECT_EQ(h.height, 720);
+  PropheseeRawSource src(f);
+  EXPECT_EQ(test::readAll(src, 100).size(), 1u);
+}
+
+// A configuration key that is a list (YAML's "? [a, b]") escaped as a yaml-cpp conversion error.
+TEST(FuzzRegressions, ConfigKeyThatIsNotAName) {
+  const fs::path f = write("config.yaml", "backend:\n  ? [a, b]\n  : 1\n");
+  OdometryConfig cfg;
+  expectInputError([&] { loadOdometryConfig(f, cfg); }, f, "line ");
+}
+
+// A DSEC camera entry that is a scalar escaped as a yaml-cpp subscript error.
+TEST(FuzzRegressions, DsecCameraThatIsNotAMap) {
+  const fs::path f = write("cam_to_cam.yaml", "intrinsics:\n  cam0: 5\n");
+  expectInputError([&] { readDsecCamera(f.string()); }, f, "camera 'cam0' is not a map");
+}
+
+}  // namespace
+}  // namespace eds
