@@ -18,6 +18,7 @@
 #include "recording_options.hpp"
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
+#include "system/realtime_run.hpp"
 
 namespace eds::app {
 
@@ -30,13 +31,28 @@ struct RunArgs {
   OdometryConfig cli;                                      // what the options wrote
   std::vector<std::pair<CLI::Option*, std::string>> keys;  // option -> parameter name
   std::vector<std::string> sets;                           // --set KEY=VALUE, in order
+  bool realtime = false;
+  RealtimeOptions realtime_options;
 };
+
+void printRealtime(const OdometryResult::Realtime& rt) {
+  std::vector<double> v = rt.latency_ms;
+  std::sort(v.begin(), v.end());
+  const auto pct = [&](double q) {
+    return v.empty() ? 0.0 : v[static_cast<std::size_t>(q * (v.size() - 1) + 0.5)];
+  };
+  std::printf(
+      "real time at x%.2f: event pose latency %.1f ms median, %.1f ms p95, %.1f ms max; skipped %zu events, "
+      "%zu frames\n",
+      rt.speed, pct(0.5), pct(0.95), v.empty() ? 0.0 : v.back(), rt.events_skipped, rt.frames_skipped);
+}
 
 void runRun(RunArgs& a) {
   Sequence seq(a.sequence, a.recording.options());
   if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   // Defaults for the sensor's size, then the file, then the command line.
   OdometryConfig cfg = defaultOdometryConfig(seq.width(), seq.height());
+  if (a.realtime) cfg.wait_for_keyframe = false;  // a live camera cannot wait for the back-end
   if (!a.config.empty()) loadOdometryConfig(a.config, cfg);
   for (const auto& [opt, key] : a.keys)
     if (opt->count() > 0) copyOdometryParameter(a.cli, cfg, key);
@@ -58,7 +74,9 @@ void runRun(RunArgs& a) {
   }
   logf(LogLevel::kInfo, "running on %s (Ctrl-C finishes early and keeps the outputs so far)",
        a.sequence.c_str());
-  const OdometryResult r = runOdometry(seq, cfg, bar, &listenForInterrupt());
+  const OdometryResult r = a.realtime
+                               ? runOdometryRealtime(seq, cfg, a.realtime_options, &listenForInterrupt())
+                               : runOdometry(seq, cfg, bar, &listenForInterrupt());
   if (r.interrupted && bar) std::fprintf(stderr, "\n");
   writeOdometryOutputs(a.out, r, cfg);
   saveOdometryConfig(std::filesystem::path(a.out) / "config_used.yaml", cfg);
@@ -76,6 +94,7 @@ void runRun(RunArgs& a) {
               r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
   if (cfg.use_events)
     std::printf("%zu of %zu event frames tracked (event-rate poses)\n", r.events_tracked, r.event_frames);
+  if (r.realtime.on) printRealtime(r.realtime);
   std::printf(
       "wrote %s/{%strajectory_frames[_live].txt, keyframes.txt, map.ply, summary.json, config_used.yaml}\n",
       a.out.c_str(), cfg.use_events ? "trajectory_events[_live].txt, " : "");
@@ -101,6 +120,15 @@ void addRunCommand(CLI::App& app) {
                   "events.tracker.levels=4 --set backend.removal=oldest); applied last");
   cmd->add_flag("--frames-only", a->frames_only,
                 "Frames alone (no events): bootstrap, frame tracking, mapping, back-end");
+  cmd->add_flag(
+      "--realtime", a->realtime,
+      "Feed the sequence on the wall clock as a camera would; when processing falls behind, late event "
+      "chunks and stale frames are dropped (summary.json: latency, what was skipped)");
+  cmd->add_option("--speed", a->realtime_options.speed, "With --realtime: sensor seconds per wall second")
+      ->capture_default_str();
+  cmd->add_option("--max-latency", a->realtime_options.max_latency_s,
+                  "With --realtime: an event chunk waiting longer than this (s) is dropped")
+      ->capture_default_str();
   // Options that set a parameter: registered with its name, so that they override the --config file.
   const auto param = [&](const std::string& name, auto& field, const std::string& key,
                          const std::string& help) {

@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "io/kalibr.hpp"
 #include "io/sequence.hpp"
+#include "sim/event_faults.hpp"
 #include "sim/presets.hpp"
 #include "sim/writer.hpp"
 
@@ -25,18 +26,30 @@ struct SimulateArgs {
   double fps = 25, exposure = 0, render_hz = 0, max_px = 0.5;
   int supersample = 2;
   bool gzip = false, quantize = false, no_depth = false;
-  std::vector<std::string> frame_gains;  // FROM:TO:GAIN, seconds from the start
+  // Faults, as FROM:TO[:VALUE] with times in seconds from the start.
+  std::vector<std::string> frame_gains, event_gaps, noise_bursts, flicker;
+  double event_offset = 0;
 };
 
-// "FROM:TO:GAIN" (seconds from the start of the sequence) as a frame fault.
-sim::FrameGain parseFrameGain(const std::string& text, TimeNs start) {
-  double from = 0, to = 0, gain = 0;
+// "FROM:TO" or "FROM:TO:VALUE" (seconds from the start of the sequence; VALUE >= 0) as a time window.
+sim::EventFaults::Window parseWindow(const std::string& text, const char* option, bool with_value,
+                                     TimeNs start) {
+  double from = 0, to = 0, value = 0;
   char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf:%lf:%lf%c", &from, &to, &gain, &tail) != 3 || !(to > from) ||
-      !(gain >= 0))
-    throw std::invalid_argument("--frame-gain '" + text +
-                                "': expected FROM:TO:GAIN with FROM < TO, GAIN >= 0");
-  return {start + fromSeconds(from), start + fromSeconds(to), gain};
+  const int n = with_value ? std::sscanf(text.c_str(), "%lf:%lf:%lf%c", &from, &to, &value, &tail)
+                           : std::sscanf(text.c_str(), "%lf:%lf%c", &from, &to, &tail);
+  if (n != (with_value ? 3 : 2) || !(to > from) || !(value >= 0))
+    throw std::invalid_argument(std::string(option) + " '" + text + "': expected FROM:TO" +
+                                (with_value ? ":VALUE" : "") + " with FROM < TO" +
+                                (with_value ? ", VALUE >= 0" : ""));
+  return {start + fromSeconds(from), start + fromSeconds(to), value};
+}
+
+std::vector<sim::EventFaults::Window> parseWindows(const std::vector<std::string>& texts, const char* option,
+                                                   bool with_value, TimeNs start) {
+  std::vector<sim::EventFaults::Window> out;
+  for (const std::string& t : texts) out.push_back(parseWindow(t, option, with_value, start));
+  return out;
 }
 
 CameraModel makeCamera(const SimulateArgs& a) {
@@ -109,8 +122,16 @@ void runSimulate(const SimulateArgs& a) {
   const std::filesystem::path out(a.out);
   sim::EcdWriter writer(out, a.gzip, !a.no_depth);
   std::vector<sim::FrameGain> gains;
-  for (const std::string& g : a.frame_gains) gains.push_back(parseFrameGain(g, motion.start()));
+  for (const auto& w : parseWindows(a.frame_gains, "--frame-gain", true, motion.start()))
+    gains.push_back({w.t0, w.t1, w.value});
   writer.setFrameGains(std::move(gains));
+  sim::EventFaults faults;
+  faults.gaps = parseWindows(a.event_gaps, "--event-gap", false, motion.start());
+  faults.bursts = parseWindows(a.noise_bursts, "--noise-burst", true, motion.start());
+  faults.flicker = parseWindows(a.flicker, "--flicker", true, motion.start());
+  faults.offset = fromSeconds(a.event_offset);
+  faults.seed = a.seed;
+  sim::EventFaultSink faulty(writer, faults, cam.width, cam.height);
   if (cam.distortion == Distortion::kEquidistant)
     sim::writeKalibrCamchain(out / "camchain.yaml", cam);
   else
@@ -119,7 +140,7 @@ void runSimulate(const SimulateArgs& a) {
   const TimeNs t0 = motion.start(), t1 = motion.end();
   sim::writeGroundTruth(out / "groundtruth.txt", motion, t0, t1, 200.0);
   sim::Simulator simulator(scene, cam, motion, cfg);
-  const sim::SimStats st = simulator.run(t0, t1, writer);
+  const sim::SimStats st = faults.any() ? simulator.run(t0, t1, faulty) : simulator.run(t0, t1, writer);
   writer.finish();
   const double span = toSeconds(t1 - t0);
   std::printf(
@@ -166,6 +187,15 @@ void addSimulateCommand(CLI::App& app) {
       "--frame-gain", a->frame_gains,
       "FROM:TO:GAIN: frames from FROM to TO s (from the start) exposed GAIN times, clipped (0.05: "
       "covered lens; 4: blown out); the events are unaffected. Repeatable");
+  cmd->add_option("--event-gap", a->event_gaps, "FROM:TO: no events in this window (a USB drop). Repeatable");
+  cmd->add_option("--noise-burst", a->noise_bursts,
+                  "FROM:TO:RATE: extra background noise, RATE events per pixel per second. Repeatable");
+  cmd->add_option(
+      "--flicker", a->flicker,
+      "FROM:TO:HZ: a light flickering at HZ over a quarter-size patch of the upper left. Repeatable");
+  cmd->add_option("--event-offset", a->event_offset,
+                  "Added to every event time, s (the event clock's offset from the frames')")
+      ->capture_default_str();
   cmd->add_option("--render-hz", a->render_hz, "Fixed render rate (0: adaptive)")->capture_default_str();
   cmd->add_option("--max-px-per-step", a->max_px, "Adaptive rendering: pixel motion per render")
       ->capture_default_str();

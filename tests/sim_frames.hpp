@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "sim/event_faults.hpp"
 #include "sim/simulator.hpp"
 #include "sim/writer.hpp"
 
@@ -46,13 +47,16 @@ inline sim::SimConfig noisySimConfig(std::uint64_t seed) {
 // test camera and 200 Hz ground truth, as `eds simulate` does.
 inline void writeSimSequence(const std::filesystem::path& dir, const sim::Scene& scene,
                              const sim::Motion& motion, const sim::SimConfig& sc,
-                             std::vector<sim::FrameGain> frame_gains = {}) {
+                             std::vector<sim::FrameGain> frame_gains = {},
+                             const sim::EventFaults& event_faults = {}) {
   const CameraModel cam = simCamera();
   sim::EcdWriter writer(dir, false, false);
   writer.setFrameGains(std::move(frame_gains));
+  sim::EventFaultSink faulty(writer, event_faults, cam.width, cam.height);
+  sim::SimSink& sink = event_faults.any() ? static_cast<sim::SimSink&>(faulty) : writer;
   sim::writeEcdCalib(dir / "calib.txt", cam);
   sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
-  sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);
+  sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), sink);
   writer.finish();
 }
 

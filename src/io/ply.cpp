@@ -65,6 +65,14 @@ PointCloud readPly(const std::filesystem::path& file) {
   if (props.size() < 3 || props[0] != "x" || props[1] != "y" || props[2] != "z")
     throw InputError(file.string(), "expected float properties x y z first");
   const bool has_intensity = props.size() > 3 && props[3] == "intensity";
+  // The header's count against what the file holds, before anything is allocated for it.
+  const auto data_start = static_cast<std::uintmax_t>(in.tellg());
+  const std::uintmax_t size = std::filesystem::file_size(file);
+  const std::uintmax_t record = props.size() * sizeof(float);
+  if (data_start > size || count > (size - data_start) / record)
+    throw InputError(file.string(), "truncated: the header says " + std::to_string(count) +
+                                        " vertices, the file holds " +
+                                        std::to_string(data_start > size ? 0 : (size - data_start) / record));
   PointCloud cloud;
   cloud.xyz.resize(count);
   cloud.intensity.assign(count, 0.f);

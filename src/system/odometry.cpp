@@ -227,6 +227,7 @@ class Core {
     last_event_ = {ef.t, *T};
     has_event_pose_ = true;
     res_.events.push_back(last_event_);
+    res_.event_last_t.push_back(ef.t_last);
     res_.event_anchors.push_back({events_.referenceId(), events_.T_w_kf().inverse() * *T});
   }
 
@@ -262,7 +263,8 @@ class Odometry::Impl {
         builder_(core_.undistorter(), cfg_.event_frame),
         n_(static_cast<std::size_t>(cfg_.event_frame.num_events)),
         stride_(cfg_.event_frame.stride()),
-        lookahead_(cfg_.event_frame.lookahead()) {}
+        lookahead_(cfg_.event_frame.lookahead()),
+        flicker_(camera.width, camera.height, cfg_.flicker_filter) {}
 
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
     checkOpen();
@@ -366,10 +368,10 @@ class Odometry::Impl {
 
   void append(const EventArray& ev, std::size_t a, std::size_t b) {
     if (pos_ > (1u << 20)) compact();
-    buf_.t.insert(buf_.t.end(), ev.t.begin() + a, ev.t.begin() + b);
-    buf_.x.insert(buf_.x.end(), ev.x.begin() + a, ev.x.begin() + b);
-    buf_.y.insert(buf_.y.end(), ev.y.begin() + a, ev.y.begin() + b);
-    buf_.p.insert(buf_.p.end(), ev.p.begin() + a, ev.p.begin() + b);
+    for (std::size_t i = a; i < b; ++i)
+      if (flicker_.keep(ev.t[i], ev.x[i], ev.y[i], ev.p[i]))
+        buf_.push_back(ev.t[i], ev.x[i], ev.y[i], ev.p[i]);
+    res_.events_flicker_dropped = flicker_.dropped();
     if (b > a) newest_t_ = ev.t[b - 1];
   }
 
@@ -469,6 +471,7 @@ class Odometry::Impl {
   std::size_t n_, stride_, lookahead_;
   // Events not yet in a packet (from pos_ on) and the packets' lookahead; base_: stream index of buf_[0].
   EventArray buf_;
+  FlickerFilter flicker_;  // in front of buf_: flickering pixels' events never enter it
   std::size_t pos_ = 0, events_in_ = 0;
   std::uint64_t base_ = 0;
   // The newest event validated (the chunk being added) and the newest appended to buf_ (the waits

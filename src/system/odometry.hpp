@@ -18,6 +18,7 @@
 #include "backend/sliding_window.hpp"
 #include "core/reflect.hpp"
 #include "frontend/event_frame.hpp"
+#include "frontend/flicker_filter.hpp"
 #include "frontend/frame_quality.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
@@ -86,6 +87,7 @@ struct OdometryConfig {
   bool wait_for_keyframe = true;
   // Events track the camera between frames (EDS); off: frames only.
   bool use_events = true;
+  FlickerFilterConfig flicker_filter;
   EventFrameConfig event_frame;
   EventFrontendConfig events;
   // Event frames that arrive during the bootstrap are tracked once the map exists, from the frames'
@@ -102,8 +104,8 @@ struct OdometryConfig {
 
 EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events,
-           event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg, bootstrap_from_events,
-           frame_rate, start_s, duration_s)
+           flicker_filter, event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg,
+           bootstrap_from_events, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;
@@ -133,13 +135,15 @@ struct OdometryResult {
   CameraModel pinhole;
   std::vector<MapPoint> map;
   std::size_t frames_in = 0, tracked = 0;
-  std::size_t frames_rejected = 0;  // kept out by the frame quality check (each one also a failure)
-  std::size_t backend_waits = 0;    // times the tracking thread waited for the threaded back-end
+  std::size_t events_flicker_dropped = 0;  // events of flickering pixels, never put into event frames
+  std::size_t frames_rejected = 0;         // kept out by the frame quality check (each one also a failure)
+  std::size_t backend_waits = 0;           // times the tracking thread waited for the threaded back-end
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization
   TimeNs first_t = 0;  // first frame considered
   int init_frames = 0, init_restarts = 0;
   std::vector<OdometryFailure> failures;
+  std::vector<TimeNs> event_last_t;  // per event pose: the time of its event frame's last event
   std::vector<double> track_ms, mapping_ms, ba_ms;  // per frame; per keyframe (both)
   std::vector<int> window_points;                   // per keyframe, after the solve
   double wall_s = 0, sequence_s = 0;
@@ -147,6 +151,13 @@ struct OdometryResult {
   // Stopped on request before the end of the input (what was computed so far is in the result).
   bool interrupted = false;
   TimeNs interrupted_t = 0;  // the last input time fed
+  // Fed on the wall clock (system/realtime_run.hpp): what had to be dropped, and how late poses came.
+  struct Realtime {
+    bool on = false;
+    double speed = 0;
+    std::vector<double> latency_ms;  // per event pose: from its frame's last event to the pose
+    std::size_t events_skipped = 0, frames_skipped = 0;
+  } realtime;
 };
 
 // A keyframe as the back-end published it (mapped and optimized once; later solves move it further).
@@ -219,6 +230,15 @@ class Odometry {
 using ProgressFn = std::function<void(double done_s, double total_s)>;
 OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress = {},
                            const std::atomic<bool>* stop = nullptr);
+
+// What a run over a recorded sequence processes: the selected frames (indices into seq.frames()) and
+// the time range; checks that the sequence holds what the configuration needs.
+struct RunPlan {
+  std::vector<std::size_t> frames;
+  TimeNs first_t = 0, t_end = 0;  // the first selected frame; the end of the range (inclusive)
+  double total_s = 0;             // the selected frames' span within the range
+};
+RunPlan planRun(const Sequence& seq, const OdometryConfig& cfg);
 
 // Frame indices to process: [start, start + duration) from the first frame, thinned to the frames
 // nearest a lower rate when frame_rate > 0.

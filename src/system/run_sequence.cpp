@@ -72,8 +72,7 @@ std::optional<TimeNs> feedSequence(const Sequence& seq, const std::vector<std::s
 
 }  // namespace
 
-OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress,
-                           const std::atomic<bool>* stop) {
+RunPlan planRun(const Sequence& seq, const OdometryConfig& cfg) {
   if (!seq.hasFrames())
     throw InputError(seq.framesSource().string(),
                      "the odometry needs frames (keyframes come from them); this " + seq.format() +
@@ -87,11 +86,22 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
       selectFrames(seq.frames(), cfg.start_s, cfg.duration_s, cfg.frame_rate);
   if (idx.empty())
     throw InputError((seq.dir() / "images.txt").string(), "no frame in the requested time range");
+  RunPlan plan;
+  plan.frames = idx;
+  plan.first_t = seq.frames()[idx.front()].t;
+  plan.t_end =
+      cfg.duration_s > 0 ? plan.first_t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
+  plan.total_s = toSeconds(std::min(seq.frames()[idx.back()].t, plan.t_end) - plan.first_t);
+  return plan;
+}
+
+OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress,
+                           const std::atomic<bool>* stop) {
+  const RunPlan plan = planRun(seq, cfg);
+  const std::vector<std::size_t>& idx = plan.frames;
+  const TimeNs first_t = plan.first_t, t_end = plan.t_end;
+  const double total_s = plan.total_s;
   Odometry odo(seq.camera(), cfg);
-  const TimeNs first_t = seq.frames()[idx.front()].t;
-  const TimeNs t_end =
-      cfg.duration_s > 0 ? first_t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
-  const double total_s = toSeconds(std::min(seq.frames()[idx.back()].t, t_end) - first_t);
   TimeNs t_reported = first_t;
   auto report = [&](TimeNs t) {
     if (!progress || t - t_reported < fromSeconds(0.1)) return;
@@ -142,6 +152,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"tracked", r.tracked},
                  {"failures", r.failures.size()},
                  {"event_frames", r.event_frames},
+                 {"events_flicker_dropped", r.events_flicker_dropped},
                  {"event_frames_tracked", r.events_tracked},
                  {"event_poses", r.events.size()},
                  {"keyframes", r.keyframes.size()},
@@ -157,6 +168,11 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   j["sequence_s"] = r.sequence_s;
   j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;
   j["peak_rss_mb"] = r.peak_rss_mb;
+  if (r.realtime.on)
+    j["realtime"] = {{"speed", r.realtime.speed},
+                     {"latency_ms", timingStats(r.realtime.latency_ms)},
+                     {"events_skipped", r.realtime.events_skipped},
+                     {"frames_skipped", r.realtime.frames_skipped}};
   nlohmann::json fails = nlohmann::json::array();
   for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
   j["failures"] = fails;

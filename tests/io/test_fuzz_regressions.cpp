@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "io/ecd_events.hpp"
 #include "io/kalibr.hpp"
+#include "io/ply.hpp"
 #include "io/prophesee.hpp"
 #include "io/read_events.hpp"
 #include "system/odometry_config_io.hpp"
@@ -82,6 +83,15 @@ TEST(FuzzRegressions, ConfigKeyThatIsNotAName) {
 TEST(FuzzRegressions, DsecCameraThatIsNotAMap) {
   const fs::path f = write("cam_to_cam.yaml", "intrinsics:\n  cam0: 5\n");
   expectInputError([&] { readDsecCamera(f.string()); }, f, "camera 'cam0' is not a map");
+}
+
+// A PLY header claiming more vertices than memory holds: allocated before the data was checked.
+TEST(FuzzRegressions, PlyVertexCountBeyondTheFile) {
+  const std::string header =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4611686018427387904\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n";
+  const fs::path f = write("map.ply", header + std::string(24, '\0'));
+  expectInputError([&] { readPly(f); }, f, "the header says 4611686018427387904 vertices, the file holds 2");
 }
 
 }  // namespace

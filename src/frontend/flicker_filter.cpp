@@ -1,0 +1,19 @@
+#include "frontend/flicker_filter.hpp"
+
+#include <limits>
+#include <stdexcept>
+
+namespace eds {
+
+FlickerFilter::FlickerFilter(int width, int height, const FlickerFilterConfig& cfg)
+    : cfg_(cfg),
+      width_(width),
+      inv_leak_ns_(1.0 / (cfg.leak_ms * 1e6)),
+      last_p_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0),
+      last_reversal_(last_p_.size(), std::numeric_limits<TimeNs>::min() / 2),
+      score_(last_p_.size(), 0.0f) {
+  if (cfg.enabled && !(cfg.leak_ms > 0 && cfg.score > 0))
+    throw std::invalid_argument("flicker filter: leak_ms and score must be > 0");
+}
+
+}  // namespace eds

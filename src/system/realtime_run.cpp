@@ -1,0 +1,169 @@
+#include "system/realtime_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "io/merged_stream.hpp"
+
+namespace eds {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Item {
+  bool frame = false;
+  std::size_t index = 0;  // frames: into seq.frames()
+  cv::Mat image;
+  EventArray events;
+  Clock::time_point released;
+};
+
+// The hand-over between the producer (the "camera") and the processing thread.
+class ReleaseQueue {
+ public:
+  explicit ReleaseQueue(std::size_t max_events) : max_events_(max_events) {}
+
+  // Never blocks: a camera cannot wait. Beyond the bound the oldest event chunks go.
+  void push(Item item) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    queued_events_ += item.events.size();
+    items_.push_back(std::move(item));
+    while (queued_events_ > max_events_) {
+      const auto it = std::find_if(items_.begin(), items_.end(), [](const Item& i) { return !i.frame; });
+      if (it == items_.end()) break;
+      queued_events_ -= it->events.size();
+      dropped_events_ += it->events.size();
+      items_.erase(it);
+    }
+    ready_.notify_one();
+  }
+
+  void close() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    closed_ = true;
+    ready_.notify_one();
+  }
+
+  // False once closed and empty. `newer_frame`: a later frame is already waiting.
+  bool pop(Item& out, bool& newer_frame) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    ready_.wait(lock, [&] { return !items_.empty() || closed_; });
+    if (items_.empty()) return false;
+    out = std::move(items_.front());
+    items_.pop_front();
+    queued_events_ -= out.events.size();
+    newer_frame = std::any_of(items_.begin(), items_.end(), [](const Item& i) { return i.frame; });
+    return true;
+  }
+
+  std::size_t droppedEvents() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return dropped_events_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<Item> items_;
+  std::size_t max_events_, queued_events_ = 0, dropped_events_ = 0;
+  bool closed_ = false;
+};
+
+// The camera: releases the selected frames and the events up to the plan's end at their times.
+void produce(const Sequence& seq, const RunPlan& plan, bool use_events,
+             const std::function<Clock::time_point(TimeNs)>& release, const std::atomic<bool>* stop,
+             ReleaseQueue& queue) {
+  MergedStream stream(seq, 2000, use_events);  // about a USB transfer's worth of events
+  std::size_t next = 0;
+  Item item;
+  for (auto kind = stream.next(item.events, item.index); kind != MergedStream::Kind::kEnd;
+       kind = stream.next(item.events, item.index)) {
+    if (stop != nullptr && stop->load(std::memory_order_relaxed)) break;
+    item.frame = kind == MergedStream::Kind::kFrame;
+    if (item.frame) {
+      if (next == plan.frames.size() || plan.frames[next] != item.index) continue;
+      ++next;
+      item.image = seq.loadFrame(item.index);
+      std::this_thread::sleep_until(release(seq.frames()[item.index].t));
+    } else {
+      const auto end =
+          std::upper_bound(item.events.t.begin(), item.events.t.end(), plan.t_end) - item.events.t.begin();
+      const auto n = static_cast<std::size_t>(end);
+      item.events.t.resize(n);
+      item.events.x.resize(n);
+      item.events.y.resize(n);
+      item.events.p.resize(n);
+      if (item.events.empty()) {
+        if (next == plan.frames.size()) break;  // past the range
+        continue;
+      }
+      std::this_thread::sleep_until(release(item.events.t.back()));
+    }
+    item.released = Clock::now();
+    queue.push(std::move(item));
+    item = Item{};
+  }
+  queue.close();
+}
+
+}  // namespace
+
+OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
+                                   const RealtimeOptions& options, const std::atomic<bool>* stop) {
+  if (!(options.speed > 0) || !(options.max_latency_s > 0))
+    throw std::invalid_argument("realtime: speed and max_latency_s must be > 0");
+  const RunPlan plan = planRun(seq, cfg);
+  Odometry odo(seq.camera(), cfg);
+  const Clock::time_point wall0 = Clock::now();
+  const auto release = [&](TimeNs t) {
+    return wall0 +
+           std::chrono::nanoseconds(std::llround(static_cast<double>(t - plan.first_t) / options.speed));
+  };
+  ReleaseQueue queue(options.max_queued_events);
+  std::thread camera(produce, std::cref(seq), std::cref(plan), cfg.use_events, release, stop,
+                     std::ref(queue));
+  OdometryResult::Realtime rt;
+  std::size_t seen = 0;
+  Item item;
+  bool newer_frame = false;
+  const auto max_wait = std::chrono::duration<double>(options.max_latency_s);
+  while (queue.pop(item, newer_frame)) {
+    if (item.frame && newer_frame) {
+      ++rt.frames_skipped;
+    } else if (!item.frame && Clock::now() - item.released > max_wait) {
+      rt.events_skipped += item.events.size();
+    } else if (item.frame) {
+      odo.addFrame(seq.frames()[item.index].t, item.image);
+    } else {
+      odo.addEvents(item.events);
+    }
+    const OdometryResult& now = odo.result();
+    for (; seen < now.events.size(); ++seen)
+      rt.latency_ms.push_back(
+          std::chrono::duration<double, std::milli>(Clock::now() - release(now.event_last_t[seen])).count());
+  }
+  camera.join();
+  OdometryResult r = odo.finish();  // may track the last buffered event frames
+  for (; seen < r.events.size(); ++seen)
+    rt.latency_ms.push_back(
+        std::chrono::duration<double, std::milli>(Clock::now() - release(r.event_last_t[seen])).count());
+  rt.on = true;
+  rt.speed = options.speed;
+  rt.events_skipped += queue.droppedEvents();
+  r.realtime = std::move(rt);
+  if (stop != nullptr && stop->load()) {
+    r.interrupted = true;
+    r.interrupted_t = r.events.empty() ? plan.first_t : r.events.back().t;
+  }
+  return r;
+}
+
+}  // namespace eds

@@ -1,0 +1,25 @@
+#pragma once
+// A recorded sequence fed to the odometry on the wall clock, as a camera driver would: a producer
+// thread releases each chunk of events and each frame when its time comes (at `speed` times real time),
+// and the calling thread processes what was released. When processing falls behind, it sheds load
+// rather than fall further behind: event chunks released more than `max_latency_s` ago are dropped
+// (the odometry sees a gap, as after a USB drop) and a frame is dropped when a newer one is already
+// waiting; the queue between the threads is bounded. The result's `realtime` part says what was
+// dropped and how late each event pose came.
+#include <atomic>
+#include <cstddef>
+
+#include "system/odometry.hpp"
+
+namespace eds {
+
+struct RealtimeOptions {
+  double speed = 1.0;                         // sensor seconds per wall second
+  double max_latency_s = 0.1;                 // wall time an event chunk may wait before it is dropped
+  std::size_t max_queued_events = 4'000'000;  // the producer drops its oldest chunks beyond this
+};
+
+OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
+                                   const RealtimeOptions& options, const std::atomic<bool>* stop = nullptr);
+
+}  // namespace eds

@@ -1,0 +1,76 @@
+// `eds run --realtime`: the sequence fed on the wall clock by a producer thread. What holds on any
+// machine, loaded or not, sanitizer or not: the input is paced by the clock, every event pose has its
+// latency, a replay far faster than the processing sheds load (dropped chunks and frames, bounded
+// queue) instead of falling behind, and a stop request ends the run. The accuracy at speeds 1 and 3 is
+// a benchmark (docs/experiments.md), not a test.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "system/odometry_config_io.hpp"
+#include "system/realtime_run.hpp"
+#include "test_data.hpp"
+
+namespace eds {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TEST(Realtime, PacedByTheClockWithALatencyPerEventPose) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  OdometryConfig cfg = defaultOdometryConfig(seq.width(), seq.height());
+  cfg.duration_s = 1.5;
+  cfg.wait_for_keyframe = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  const OdometryResult r = runOdometryRealtime(seq, cfg, {.speed = 1.0});
+  const double wall = secondsSince(t0);
+  std::printf("[ ESIM 1.5 s at x1 ] %.2f s wall, %zu event poses, %zu events and %zu frames skipped\n", wall,
+              r.events.size(), r.realtime.events_skipped, r.realtime.frames_skipped);
+  EXPECT_GE(wall, 1.45);  // the last data is released 1.5 s after the first
+  EXPECT_TRUE(r.realtime.on);
+  ASSERT_EQ(r.realtime.latency_ms.size(), r.events.size());
+  for (const double ms : r.realtime.latency_ms) EXPECT_GE(ms, 0.0);
+  ASSERT_EQ(r.event_last_t.size(), r.events.size());
+  for (std::size_t i = 0; i < r.events.size(); ++i) EXPECT_GE(r.event_last_t[i], r.events[i].t);
+}
+
+TEST(Realtime, FarFasterThanTheProcessingShedsLoad) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  OdometryConfig cfg = defaultOdometryConfig(seq.width(), seq.height());
+  cfg.wait_for_keyframe = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  const OdometryResult r = runOdometryRealtime(seq, cfg, {.speed = 50.0, .max_latency_s = 0.02});
+  const double wall = secondsSince(t0);
+  std::printf("[ ESIM at x50 ] %.2f s wall, %zu events and %zu frames skipped, %zu event poses\n", wall,
+              r.realtime.events_skipped, r.realtime.frames_skipped, r.events.size());
+  // 6 s of sequence released in 0.12 s: most of it cannot be processed in time and is dropped.
+  EXPECT_GT(r.realtime.events_skipped, 1'000'000u);
+  EXPECT_GT(r.realtime.frames_skipped, 50u);
+  EXPECT_LT(r.frames_in, seq.frames().size());
+}
+
+TEST(Realtime, AStopRequestEndsTheRun) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  OdometryConfig cfg = defaultOdometryConfig(seq.width(), seq.height());
+  std::atomic<bool> stop{false};
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    stop = true;
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  const OdometryResult r = runOdometryRealtime(seq, cfg, {.speed = 1.0}, &stop);
+  stopper.join();
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_LT(secondsSince(t0), 5.0);  // not the sequence's 6 s
+}
+
+}  // namespace
+}  // namespace eds
