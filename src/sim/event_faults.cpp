@@ -87,7 +87,7 @@ void EventFaultSink::onEvents(const EventArray& events) {
     const bool take_event = j == extra_.size() || (i < events.size() && events.t[i] <= extra_.t[j]);
     const EventArray& src = take_event ? events : extra_;
     const std::size_t k = take_event ? i++ : j++;
-    if (inAny(faults_.gaps, src.t[k])) continue;
+    if (inAny(faults_.gaps, src.t[k]) || src.t[k] + faults_.offset < 0) continue;  // no negative times
     merged_.push_back(src.t[k] + faults_.offset, src.x[k], src.y[k], src.p[k]);
   }
   inner_.onEvents(merged_);

@@ -11,6 +11,7 @@
 #include "io/merged_stream.hpp"
 #include "io/output_file.hpp"
 #include "io/ply.hpp"
+#include "system/clock_offset.hpp"
 #include "system/odometry.hpp"
 #include "system/reference_run.hpp"
 #include "system/run_stats.hpp"
@@ -168,6 +169,14 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   j["sequence_s"] = r.sequence_s;
   j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;
   j["peak_rss_mb"] = r.peak_rss_mb;
+  if (cfg.use_events) {
+    const ClockOffsetEstimate off = estimateEventClockOffset(r.frames, r.events);
+    if (off.valid)
+      j["event_clock_offset"] = {{"estimate_ms", off.offset_ms},
+                                 {"rotation_rms_deg_at_zero", off.rms_deg_at_zero},
+                                 {"rotation_rms_deg_at_estimate", off.rms_deg_at_best},
+                                 {"suggests_offset", off.suggestsOffset()}};
+  }
   if (r.realtime.on)
     j["realtime"] = {{"speed", r.realtime.speed},
                      {"latency_ms", timingStats(r.realtime.latency_ms)},
