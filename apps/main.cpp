@@ -36,7 +36,8 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // Help and version print and succeed; any other usage error is bad input, as below.
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const eds::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;
@@ -47,5 +48,7 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   }
-  return eds::app::interrupted() ? 130 : 0;  // 128 + SIGINT, as a shell reports an interrupted program
+  // Exit codes: 0 done, 1 an internal error, 2 bad input or usage (the message names the file and line or
+  // the option), 130 stopped by SIGINT/SIGTERM (128 + SIGINT, as a shell reports it).
+  return eds::app::interrupted() ? 130 : 0;
 }

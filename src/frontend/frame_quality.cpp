@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <vector>
 
 namespace eds {
@@ -22,6 +23,15 @@ std::string describe(const char* format, double value) {
 }
 
 }  // namespace
+
+FrameQualityGate::FrameQualityGate(const FrameQualityConfig& cfg) : cfg_(cfg) {
+  const auto fraction = [](double v) { return v > 0 && v <= 1; };
+  if (!fraction(cfg.max_saturated) || !fraction(cfg.max_dark) || !(cfg.min_texture_ratio >= 0) ||
+      !(cfg.max_brightness_ratio >= 1) || cfg.history < 1 || !(cfg.relearn_after_s >= 0))
+    throw std::invalid_argument(
+        "frame_quality: max_saturated and max_dark must be in (0, 1], min_texture_ratio >= 0, "
+        "max_brightness_ratio >= 1, history >= 1, relearn_after_s >= 0");
+}
 
 FrameStats measureFrame(const cv::Mat& gray8) {
   CV_Assert(gray8.type() == CV_8UC1 && gray8.rows >= 2 && gray8.cols >= 2);
@@ -74,7 +84,7 @@ std::string FrameQualityGate::check(TimeNs t, const cv::Mat& gray8) {
   }
   refused_since_ = -1;
   accepted_.push_back(s);
-  while (static_cast<int>(accepted_.size()) > std::max(cfg_.history, 1)) accepted_.pop_front();
+  while (static_cast<int>(accepted_.size()) > cfg_.history) accepted_.pop_front();
   return {};
 }
 

@@ -38,7 +38,7 @@ FrameStats measureFrame(const cv::Mat& gray8);
 
 class FrameQualityGate {
  public:
-  explicit FrameQualityGate(const FrameQualityConfig& cfg) : cfg_(cfg) {}
+  explicit FrameQualityGate(const FrameQualityConfig& cfg);
   // Empty when the frame at time t can be used (it then joins the reference); else why it cannot.
   std::string check(TimeNs t, const cv::Mat& gray8);
 
