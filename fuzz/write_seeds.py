@@ -18,14 +18,10 @@ import rosbag
 import rospy
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "tools"))
-from write_bags import DEFINITIONS, HEADER, SEP  # noqa: E402  (the message definitions the bag tests use)
+from write_bags import DEFINITIONS  # noqa: E402  (the message definitions the bag tests use)
 
-DEFS = dict(DEFINITIONS)
-DEFS["event_camera_msgs/EventPacket"] = ("std_msgs/Header header\nuint32 height\nuint32 width\nuint64 seq\n"
-                                         "uint64 time_base\nstring encoding\nbool is_bigendian\nuint8[] events\n"
-                                         + SEP + HEADER)
 C = {}
-for name, text in DEFS.items():
+for name, text in DEFINITIONS.items():
     C.update(genpy.dynamic.generate_dynamic(name, text))
 
 # EVT 3.0: TIME_HIGH, TIME_LOW, Y, X_BASE, VECT_12 (three events), X_POS, EXT_TRIGGER.

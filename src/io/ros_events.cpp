@@ -112,7 +112,7 @@ struct RosEventSource::Impl {
     if (p.events.size() % 2 != 0) throw error("evt3 payload of an odd number of bytes");
     const std::size_t first_trigger = stats.triggers.size();
     words.resize(p.events.size() / 2);
-    std::memcpy(words.data(), p.events.data(), p.events.size());
+    if (p.events.size() > 0) std::memcpy(words.data(), p.events.data(), p.events.size());
     try {
       evt3.decode(words.data(), words.size(), pending, stats.triggers);
     } catch (const EvtWordError& e) {

@@ -2,6 +2,7 @@
 // reduced to what triggers it: now an InputError naming the file (and line), or read correctly.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <string>
 
@@ -11,6 +12,7 @@
 #include "io/ply.hpp"
 #include "io/prophesee.hpp"
 #include "io/read_events.hpp"
+#include "io/ros_events.hpp"
 #include "system/odometry_config_io.hpp"
 #include "test_data.hpp"
 
@@ -92,6 +94,22 @@ TEST(FuzzRegressions, PlyVertexCountBeyondTheFile) {
       "property float y\nproperty float z\nend_header\n";
   const fs::path f = write("map.ply", header + std::string(24, '\0'));
   expectInputError([&] { readPly(f); }, f, "the header says 4611686018427387904 vertices, the file holds 2");
+}
+
+// An EventPacket with an empty payload: memcpy from a null pointer (UndefinedBehaviorSanitizer).
+TEST(FuzzRegressions, EventPacketWithNoPayload) {
+  EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import rosbag, genpy' > /dev/null 2>&1") == 0,
+                        "Debian python3-rosbag, python3-genpy");
+  const fs::path dir = test::tempDir("fuzz_regressions_packet");
+  const std::string cmd =
+      "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --empty-packet " + dir.string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  RosEventSource src(dir / "empty_packet.bag");
+  const EventArray e = test::readAll(src, 100);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e.x[0], 10);
+  EXPECT_EQ(e.y[0], 5);
+  EXPECT_EQ(e.p[0], 1);
 }
 
 }  // namespace

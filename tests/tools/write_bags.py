@@ -5,6 +5,7 @@ code).
 
 usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S [COMPRESSION]]
        write_bags.py --stereo SEQUENCE_DIR OUT_DIR UNTIL_S   (see write_stereo)
+       write_bags.py --empty-packet OUT_DIR                  (see write_empty_packet)
 writes OUT_DIR/events_{none,bz2,lz4}.bag (dvs_msgs/EventArray on /dvs/events); with UNTIL_S also
 OUT_DIR/recording.bag (lz4 unless COMPRESSION says otherwise): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
 calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
@@ -12,6 +13,7 @@ calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
 write_imu) up to UNTIL_S seconds.
 """
 import gzip
+import struct
 import sys
 
 import genpy.dynamic
@@ -36,6 +38,8 @@ DEFINITIONS = {
     "geometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n" + SEP + HEADER + SEP
     + "MSG: geometry_msgs/Quaternion\nfloat64 x\nfloat64 y\nfloat64 z\nfloat64 w\n" + SEP
     + "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n",
+    "event_camera_msgs/EventPacket": "std_msgs/Header header\nuint32 height\nuint32 width\nuint64 seq\n"
+    "uint64 time_base\nstring encoding\nbool is_bigendian\nuint8[] events\n" + SEP + HEADER,
     "geometry_msgs/PoseStamped": "std_msgs/Header header\ngeometry_msgs/Pose pose\n" + SEP + HEADER + SEP
     + "MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n" + SEP
     + "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n" + SEP
@@ -147,7 +151,23 @@ def write_stereo(seq_dir, out_dir, until):
             write_events(bag, events[::step], 500, size[0], size[1], f"/davis/{side}/events")
 
 
+def write_empty_packet(out_dir):
+    """OUT_DIR/empty_packet.bag: an evt3 EventPacket with no payload, then one with a single event
+    (TIME_HIGH, TIME_LOW, Y 5, X 10 ON) at pixel (10, 5)."""
+    Packet = CLASSES["event_camera_msgs/EventPacket"]
+    words = [0x8000, 0x6010, 0x0005, 0x2000 | 0x800 | 10]
+    with rosbag.Bag(f"{out_dir}/empty_packet.bag", "w") as bag:
+        for k, payload in enumerate((b"", struct.pack("<4H", *words))):
+            msg = Packet(height=720, width=1280, seq=k, time_base=0, encoding="evt3", is_bigendian=False,
+                         events=payload)
+            msg.header.stamp = rospy.Time(1, k * 1000)
+            bag.write("/events", msg, t=msg.header.stamp)
+
+
 def main():
+    if sys.argv[1] == "--empty-packet":
+        write_empty_packet(sys.argv[2])
+        return
     if sys.argv[1] == "--stereo":
         write_stereo(sys.argv[2], sys.argv[3], float(sys.argv[4]))
         return
