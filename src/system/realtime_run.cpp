@@ -5,6 +5,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <stdexcept>
@@ -52,6 +53,19 @@ class ReleaseQueue {
     ready_.notify_one();
   }
 
+  // The producer failed (bad input in the recording): closes the queue; the consumer rethrows.
+  void fail(std::exception_ptr error) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    error_ = std::move(error);
+    closed_ = true;
+    ready_.notify_one();
+  }
+
+  std::exception_ptr error() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return error_;
+  }
+
   // False once closed and empty. `newer_frame`: a later frame is already waiting.
   bool pop(Item& out, bool& newer_frame) {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -75,18 +89,19 @@ class ReleaseQueue {
   std::deque<Item> items_;
   std::size_t max_events_, queued_events_ = 0, dropped_events_ = 0;
   bool closed_ = false;
+  std::exception_ptr error_;
 };
 
 // The camera: releases the selected frames and the events up to the plan's end at their times.
-void produce(const Sequence& seq, const RunPlan& plan, bool use_events,
-             const std::function<Clock::time_point(TimeNs)>& release, const std::atomic<bool>* stop,
-             ReleaseQueue& queue) {
+void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,
+                const std::function<Clock::time_point(TimeNs)>& release, const std::function<bool()>& stopped,
+                ReleaseQueue& queue) {
   MergedStream stream(seq, 2000, use_events);  // about a USB transfer's worth of events
   std::size_t next = 0;
   Item item;
   for (auto kind = stream.next(item.events, item.index); kind != MergedStream::Kind::kEnd;
        kind = stream.next(item.events, item.index)) {
-    if (stop != nullptr && stop->load(std::memory_order_relaxed)) break;
+    if (stopped()) break;
     item.frame = kind == MergedStream::Kind::kFrame;
     if (item.frame) {
       if (next == plan.frames.size() || plan.frames[next] != item.index) continue;
@@ -111,27 +126,32 @@ void produce(const Sequence& seq, const RunPlan& plan, bool use_events,
     queue.push(std::move(item));
     item = Item{};
   }
-  queue.close();
 }
 
-}  // namespace
+// The producer thread's body: any error (a damaged recording) goes to the consumer, never terminate().
+void produce(const Sequence& seq, const RunPlan& plan, bool use_events,
+             const std::function<Clock::time_point(TimeNs)>& release, const std::function<bool()>& stopped,
+             ReleaseQueue& queue) {
+  try {
+    releaseAll(seq, plan, use_events, release, stopped, queue);
+    queue.close();
+  } catch (...) {
+    queue.fail(std::current_exception());
+  }
+}
 
-OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
-                                   const RealtimeOptions& options, const std::atomic<bool>* stop) {
-  if (!(options.speed > 0) || !(options.max_latency_s > 0))
-    throw std::invalid_argument("realtime: speed and max_latency_s must be > 0");
-  const RunPlan plan = planRun(seq, cfg);
-  Odometry odo(seq.camera(), cfg);
-  const Clock::time_point wall0 = Clock::now();
-  const auto release = [&](TimeNs t) {
-    return wall0 +
-           std::chrono::nanoseconds(std::llround(static_cast<double>(t - plan.first_t) / options.speed));
-  };
-  ReleaseQueue queue(options.max_queued_events);
-  std::thread camera(produce, std::cref(seq), std::cref(plan), cfg.use_events, release, stop,
-                     std::ref(queue));
-  OdometryResult::Realtime rt;
-  std::size_t seen = 0;
+using ReleaseFn = std::function<Clock::time_point(TimeNs)>;
+
+// The event pose latencies of poses produced since the last call.
+void recordLatencies(const OdometryResult& now, const ReleaseFn& release, std::vector<double>& latency_ms) {
+  for (std::size_t k = latency_ms.size(); k < now.events.size(); ++k)
+    latency_ms.push_back(
+        std::chrono::duration<double, std::milli>(Clock::now() - release(now.event_last_t[k])).count());
+}
+
+// The processing: what was released, unless it waited too long (chunks) or is stale (frames).
+void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseFn& release,
+             ReleaseQueue& queue, Odometry& odo, OdometryResult::Realtime& rt) {
   Item item;
   bool newer_frame = false;
   const auto max_wait = std::chrono::duration<double>(options.max_latency_s);
@@ -145,16 +165,40 @@ OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cf
     } else {
       odo.addEvents(item.events);
     }
-    const OdometryResult& now = odo.result();
-    for (; seen < now.events.size(); ++seen)
-      rt.latency_ms.push_back(
-          std::chrono::duration<double, std::milli>(Clock::now() - release(now.event_last_t[seen])).count());
+    recordLatencies(odo.result(), release, rt.latency_ms);
+  }
+}
+
+}  // namespace
+
+OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
+                                   const RealtimeOptions& options, const std::atomic<bool>* stop) {
+  if (!(options.speed > 0) || !(options.max_latency_s > 0))
+    throw std::invalid_argument("realtime: speed and max_latency_s must be > 0");
+  const RunPlan plan = planRun(seq, cfg);
+  Odometry odo(seq.camera(), cfg);
+  const Clock::time_point wall0 = Clock::now();
+  const ReleaseFn release = [&](TimeNs t) {
+    return wall0 +
+           std::chrono::nanoseconds(std::llround(static_cast<double>(t - plan.first_t) / options.speed));
+  };
+  ReleaseQueue queue(options.max_queued_events);
+  std::atomic<bool> failed{false};  // the processing threw: the producer stops too
+  const std::function<bool()> stopped = [&] { return failed.load() || (stop != nullptr && stop->load()); };
+  std::thread camera(produce, std::cref(seq), std::cref(plan), cfg.use_events, std::cref(release),
+                     std::cref(stopped), std::ref(queue));
+  OdometryResult::Realtime rt;
+  try {
+    consume(seq, options, release, queue, odo, rt);
+  } catch (...) {
+    failed = true;
+    camera.join();
+    throw;
   }
   camera.join();
+  if (const std::exception_ptr error = queue.error()) std::rethrow_exception(error);
   OdometryResult r = odo.finish();  // may track the last buffered event frames
-  for (; seen < r.events.size(); ++seen)
-    rt.latency_ms.push_back(
-        std::chrono::duration<double, std::milli>(Clock::now() - release(r.event_last_t[seen])).count());
+  recordLatencies(r, release, rt.latency_ms);
   rt.on = true;
   rt.speed = options.speed;
   rt.events_skipped += queue.droppedEvents();

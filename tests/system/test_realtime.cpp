@@ -8,8 +8,12 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
 #include <thread>
 
+#include "core/error.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/realtime_run.hpp"
 #include "test_data.hpp"
@@ -70,6 +74,28 @@ TEST(Realtime, AStopRequestEndsTheRun) {
   stopper.join();
   EXPECT_TRUE(r.interrupted);
   EXPECT_LT(secondsSince(t0), 5.0);  // not the sequence's 6 s
+}
+
+// A damaged recording: the producer thread's InputError reaches the caller (no terminate()).
+TEST(Realtime, BadInputInTheRecordingIsAnInputError) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const auto seq_dir = test::tempDir("realtime_bad");
+  std::filesystem::copy_file(dir / "calib.txt", seq_dir / "calib.txt");
+  std::filesystem::copy_file(dir / "images.txt", seq_dir / "images.txt");
+  std::filesystem::create_directory_symlink(dir / "images", seq_dir / "images");
+  const std::string cmd = "zcat " + (dir / "events.txt.gz").string() + " | head -n 200000 > " +
+                          (seq_dir / "events.txt").string() + " && echo '0.9 not an event' >> " +
+                          (seq_dir / "events.txt").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const Sequence seq(seq_dir);
+  OdometryConfig cfg = defaultOdometryConfig(seq.width(), seq.height());
+  try {
+    runOdometryRealtime(seq, cfg, {.speed = 5.0});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find((seq_dir / "events.txt").string() + ":200001"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
