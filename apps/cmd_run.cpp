@@ -19,6 +19,7 @@
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/realtime_run.hpp"
+#include "system/run_stats.hpp"
 
 namespace eds::app {
 
@@ -36,15 +37,12 @@ struct RunArgs {
 };
 
 void printRealtime(const OdometryResult::Realtime& rt) {
-  std::vector<double> v = rt.latency_ms;
-  std::sort(v.begin(), v.end());
-  const auto pct = [&](double q) {
-    return v.empty() ? 0.0 : v[static_cast<std::size_t>(q * (v.size() - 1) + 0.5)];
-  };
+  const nlohmann::json s = timingStats(rt.latency_ms);  // as summary.json reports it
+  const auto at = [&](const char* key) { return s.is_null() ? 0.0 : s[key].get<double>(); };
   std::printf(
       "real time at x%.2f: event pose latency %.1f ms median, %.1f ms p95, %.1f ms max; skipped %zu events, "
       "%zu frames\n",
-      rt.speed, pct(0.5), pct(0.95), v.empty() ? 0.0 : v.back(), rt.events_skipped, rt.frames_skipped);
+      rt.speed, at("median"), at("p95"), at("max"), rt.events_skipped, rt.frames_skipped);
 }
 
 void runRun(RunArgs& a) {
