@@ -16,6 +16,7 @@
 #include "interrupt.hpp"
 #include "io/output_file.hpp"
 #include "recording_options.hpp"
+#include "report/html_report.hpp"
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/realtime_run.hpp"
@@ -34,6 +35,7 @@ struct RunArgs {
   std::vector<std::string> sets;                           // --set KEY=VALUE, in order
   bool realtime = false;
   RealtimeOptions realtime_options;
+  bool report = false;
 };
 
 void printRealtime(const OdometryResult::Realtime& rt) {
@@ -76,7 +78,9 @@ void runRun(RunArgs& a) {
                                ? runOdometryRealtime(seq, cfg, a.realtime_options, &listenForInterrupt())
                                : runOdometry(seq, cfg, bar, &listenForInterrupt());
   if (r.interrupted && bar) std::fprintf(stderr, "\n");
-  writeOdometryOutputs(a.out, r, cfg);
+  RunInputs inputs{a.sequence, seq.format(), {}};
+  if (seq.hasGroundTruth()) inputs.groundtruth = seq.groundTruth();
+  writeOdometryOutputs(a.out, r, cfg, inputs);
   saveOdometryConfig(std::filesystem::path(a.out) / "config_used.yaml", cfg);
   if (!r.initialized)
     std::printf("never initialized over %zu frames (not enough texture or parallax)\n", r.frames_in);
@@ -96,6 +100,11 @@ void runRun(RunArgs& a) {
   std::printf(
       "wrote %s/{%strajectory_frames[_live].txt, keyframes.txt, map.ply, summary.json, config_used.yaml}\n",
       a.out.c_str(), cfg.use_events ? "trajectory_events[_live].txt, " : "");
+  if (a.report) {
+    const std::filesystem::path html = std::filesystem::path(a.out) / "report.html";
+    report::writeReport({a.out}, {}, html);
+    std::printf("wrote %s\n", html.string().c_str());
+  }
 }
 
 }  // namespace
@@ -122,6 +131,9 @@ void addRunCommand(CLI::App& app) {
       "--realtime", a->realtime,
       "Feed the sequence on the wall clock as a camera would; when processing falls behind, late event "
       "chunks and stale frames are dropped (summary.json: latency, what was skipped)");
+  cmd->add_flag("--report", a->report,
+                "Also write DIR/report.html (eds report: plots, keyframe and event-frame images, 3D map; "
+                "accuracy when the sequence has ground truth)");
   cmd->add_option("--speed", a->realtime_options.speed, "With --realtime: sensor seconds per wall second")
       ->capture_default_str();
   cmd->add_option("--max-latency", a->realtime_options.max_latency_s,

@@ -11,5 +11,6 @@ void addSimulateCommand(CLI::App& app);
 void addTrackCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addCalibrateCommand(CLI::App& app);
+void addReportCommand(CLI::App& app);
 
 }  // namespace eds::app

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   eds::app::addTrackCommand(app);
   eds::app::addRunCommand(app);
   eds::app::addCalibrateCommand(app);
+  eds::app::addReportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -288,17 +288,20 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
   return res;
 }
 
-cv::Mat EventTracker::predictedImage(const Vec6& nu, int width, int height) const {
+cv::Mat EventTracker::predictedImage(const SE3& T_ef_kf, const Vec6& nu, int width, int height) const {
   cv::Mat img(height, width, CV_32F, cv::Scalar(0));
   double s = 0;
-  for (const Row6& a : a_) s += std::pow(a.dot(nu), 2);
-  s = std::sqrt(s);
-  if (!(s > 0)) return img;
   for (std::size_t i = 0; i < a_.size(); ++i) {
-    const int x = static_cast<int>(std::lround(px_kf_[i].x)), y = static_cast<int>(std::lround(px_kf_[i].y));
-    if (x >= 0 && y >= 0 && x < width && y < height)
-      img.at<float>(y, x) = static_cast<float>(a_[i].dot(nu) / s);
+    const Vec3 p = T_ef_kf * p_kf_[i];
+    if (p.z() <= 0) continue;
+    const Vec2 u = cam_.project(p);
+    const long x = std::lround(u.x()), y = std::lround(u.y());
+    if (x < 0 || y < 0 || x >= width || y >= height) continue;
+    const double v = a_[i].dot(nu);
+    img.at<float>(static_cast<int>(y), static_cast<int>(x)) = static_cast<float>(v);
+    s += v * v;
   }
+  if (s > 0) img /= std::sqrt(s);
   return img;
 }
 

@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/reflect.hpp"
 #include "core/se3.hpp"
 #include "frontend/egm.hpp"
 #include "frontend/event_frame.hpp"
 #include "map/keyframe.hpp"
-#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -37,7 +37,8 @@ struct EventTrackerConfig {
   void validate() const;
 };
 
-EDS_FIELDS(EventTrackerConfig, max_iterations, levels, huber_initial, adapt_huber, border, set_margin, min_points, min_correlation, lambda_initial)
+EDS_FIELDS(EventTrackerConfig, max_iterations, levels, huber_initial, adapt_huber, border, set_margin,
+           min_points, min_correlation, lambda_initial)
 
 // A Gaussian prior on the pose (a motion model's prediction). Its error is the left twist
 // e = log(T_ef_kf · T_prior⁻¹) = (translation, rotation), with standard deviations `sigma` in metres and
@@ -89,8 +90,9 @@ class EventTracker {
   int evaluate(const cv::Mat& delta, const SE3& T_ef_kf, const Vec6& nu, Eigen::VectorXd& r,
                Eigen::MatrixXd* J) const;
 
-  // Predicted ΔL̂ (normalized over the points) drawn at the keyframe pixels: for debug images.
-  cv::Mat predictedImage(const Vec6& nu, int width, int height) const;
+  // Predicted ΔL̂ (normalized over the points in view) drawn where each point lands in the event
+  // frame at T_ef_kf: the model's picture of the event frame, for reports and debug images.
+  cv::Mat predictedImage(const SE3& T_ef_kf, const Vec6& nu, int width, int height) const;
 
   double huberThreshold() const { return huber_; }
 

@@ -6,11 +6,11 @@
 // paper's 10-15 % of pixels. Frames, when they come, correct the estimate (they are sharper).
 #include <optional>
 
+#include "core/reflect.hpp"
 #include "frontend/event_frame.hpp"
 #include "frontend/event_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "mapping/depth_fill.hpp"
-#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -68,6 +68,8 @@ class EventFrontend {
   int numPoints() const { return static_cast<int>(tracker_.numPoints()); }
   // The last solve's correlation n̂·n of the event frame with the model's prediction.
   double lastCorrelation() const { return last_correlation_; }
+  // The model's prediction ΔL̂ of the last tracked event frame, at its pose (EventTracker::predictedImage).
+  cv::Mat lastPrediction() const { return tracker_.predictedImage(T_ef_kf_, nu_, cam_.width, cam_.height); }
 
  private:
   CameraModel cam_;

@@ -229,6 +229,20 @@ class Core {
     res_.events.push_back(last_event_);
     res_.event_last_t.push_back(ef.t_last);
     res_.event_anchors.push_back({events_.referenceId(), events_.T_w_kf().inverse() * *T});
+    if (events_.referenceId() != snapshot_ref_id_) snapshot(ef);
+  }
+
+  // Every stride-th keyframe's first event frame; at kMax, every other one goes and the stride doubles.
+  void snapshot(const EventFrame& ef) {
+    snapshot_ref_id_ = events_.referenceId();
+    if (snapshot_refs_++ % snapshot_stride_ != 0) return;
+    auto& shots = res_.event_snapshots;
+    shots.push_back(
+        {ef.t, snapshot_ref_id_, events_.lastCorrelation(), ef.delta.clone(), events_.lastPrediction()});
+    if (shots.size() < EventFrameSnapshot::kMax) return;
+    for (std::size_t i = 1; 2 * i < shots.size(); ++i) shots[i] = std::move(shots[2 * i]);
+    shots.resize((shots.size() + 1) / 2);
+    snapshot_stride_ *= 2;
   }
 
   const OdometryConfig& cfg_;
@@ -248,6 +262,8 @@ class Core {
   StampedPose last_event_;
   bool has_event_pose_ = false;
   TimeNs last_t_ = 0;
+  int snapshot_ref_id_ = -1;
+  std::size_t snapshot_refs_ = 0, snapshot_stride_ = 1;
 };
 
 }  // namespace

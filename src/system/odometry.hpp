@@ -112,6 +112,17 @@ struct OdometryFailure {
   std::string reason;
 };
 
+// An event frame next to the event generation model's prediction at its tracked pose (both on the
+// undistorted grid, unit norm), for reports: the first event frame tracked against a keyframe, for
+// keyframes spread evenly over the run (at most kMax of them, whatever its length).
+struct EventFrameSnapshot {
+  static constexpr std::size_t kMax = 12;
+  TimeNs t = 0;
+  int kf_id = -1;
+  double correlation = 0;    // n̂·n of the solve
+  cv::Mat delta, predicted;  // CV_32F
+};
+
 // The keyframe a pose was tracked against (-1: none) and the pose relative to it.
 struct PoseAnchor {
   int kf_id = -1;
@@ -128,7 +139,8 @@ struct OdometryResult {
   Trajectory frames_refined, events_refined;
   std::size_t event_frames = 0, events_tracked = 0;
   std::vector<double> event_track_ms;
-  Trajectory keyframes;  // final (optimized) keyframe poses
+  std::vector<EventFrameSnapshot> event_snapshots;  // in time order
+  Trajectory keyframes;                             // final (optimized) keyframe poses
   // Every keyframe at its final pose with its image and points, in time order (the reference map that
   // `eds track --reference` tracks against), on the undistorted grid of `pinhole`.
   std::vector<RetiredKeyframe> keyframe_maps;
@@ -245,9 +257,17 @@ RunPlan planRun(const Sequence& seq, const OdometryConfig& cfg);
 std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, double start_s, double duration_s,
                                       double frame_rate);
 
+// What a run read, for summary.json and `eds report` (left empty by callers that feed an Odometry
+// themselves).
+struct RunInputs {
+  std::string sequence, format;
+  Trajectory groundtruth;  // the recording's own, written beside the estimate (empty: none)
+};
+
 // trajectory_frames.txt (refined) and trajectory_frames_live.txt (as tracked), the same for events,
-// keyframes.txt, map.ply, summary.json, and keyframes/ (system/reference_run.hpp).
+// keyframes.txt, map.ply, summary.json, timings.json (every stage's per-item times), keyframes/
+// (system/reference_run.hpp), event_frames/ (system/event_snapshots.hpp) and groundtruth.txt.
 void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult& r,
-                          const OdometryConfig& cfg);
+                          const OdometryConfig& cfg, const RunInputs& inputs = {});
 
 }  // namespace eds

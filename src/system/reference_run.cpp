@@ -76,31 +76,50 @@ void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel
   writeTum(kdir / "index.txt", index);
 }
 
-ReferenceRun readReferenceRun(const std::filesystem::path& dir) {
+Trajectory readReferenceIndex(const std::filesystem::path& dir) {
   const std::filesystem::path kdir = dir / "keyframes";
   if (!std::filesystem::is_directory(kdir))
     throw InputError(kdir.string(), "no keyframes folder: give the output folder of `eds run`");
-  ReferenceRun run;
-  run.pinhole = readEcdCalib(kdir / "camera.txt");
-  if (run.pinhole.distortion != Distortion::kNone)
-    throw InputError((kdir / "camera.txt").string(), "expected a pinhole camera 'fx fy cx cy'");
-  const Trajectory index = readTum(kdir / "index.txt");
+  Trajectory index = readTum(kdir / "index.txt");
   if (index.empty()) throw InputError((kdir / "index.txt").string(), "no keyframe");
-  for (std::size_t i = 0; i < index.size(); ++i) {
-    const std::filesystem::path png = keyframeFile(kdir, i, "png");
-    const cv::Mat img8 = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
-    if (img8.empty()) throw InputError(png.string(), "missing or unreadable keyframe image");
-    if (i == 0) run.pinhole.width = img8.cols, run.pinhole.height = img8.rows;
-    if (img8.cols != run.pinhole.width || img8.rows != run.pinhole.height)
-      throw InputError(png.string(), "image size differs from the first keyframe's");
-    Keyframe kf;
-    kf.id = static_cast<int>(i);
-    kf.t = index[i].t;
-    kf.T_w_kf = index[i].T_w_c;
-    img8.convertTo(kf.image, CV_32F, 1.0 / 255.0);
-    kf.points = readPoints(keyframeFile(kdir, i, "txt"), img8.cols, img8.rows);
-    run.keyframes.push_back(std::move(kf));
-  }
+  return index;
+}
+
+CameraModel readReferenceCamera(const std::filesystem::path& dir) {
+  const std::filesystem::path kdir = dir / "keyframes";
+  CameraModel pinhole = readEcdCalib(kdir / "camera.txt");
+  if (pinhole.distortion != Distortion::kNone)
+    throw InputError((kdir / "camera.txt").string(), "expected a pinhole camera 'fx fy cx cy'");
+  const std::filesystem::path png = keyframeFile(kdir, 0, "png");
+  const cv::Mat img8 = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
+  if (img8.empty()) throw InputError(png.string(), "missing or unreadable keyframe image");
+  pinhole.width = img8.cols, pinhole.height = img8.rows;
+  return pinhole;
+}
+
+Keyframe readReferenceKeyframe(const std::filesystem::path& dir, const CameraModel& pinhole,
+                               const Trajectory& index, std::size_t i) {
+  const std::filesystem::path kdir = dir / "keyframes";
+  const std::filesystem::path png = keyframeFile(kdir, i, "png");
+  const cv::Mat img8 = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
+  if (img8.empty()) throw InputError(png.string(), "missing or unreadable keyframe image");
+  if (img8.cols != pinhole.width || img8.rows != pinhole.height)
+    throw InputError(png.string(), "image size differs from the first keyframe's");
+  Keyframe kf;
+  kf.id = static_cast<int>(i);
+  kf.t = index.at(i).t;
+  kf.T_w_kf = index[i].T_w_c;
+  img8.convertTo(kf.image, CV_32F, 1.0 / 255.0);
+  kf.points = readPoints(keyframeFile(kdir, i, "txt"), img8.cols, img8.rows);
+  return kf;
+}
+
+ReferenceRun readReferenceRun(const std::filesystem::path& dir) {
+  ReferenceRun run;
+  const Trajectory index = readReferenceIndex(dir);
+  run.pinhole = readReferenceCamera(dir);
+  for (std::size_t i = 0; i < index.size(); ++i)
+    run.keyframes.push_back(readReferenceKeyframe(dir, run.pinhole, index, i));
   return run;
 }
 

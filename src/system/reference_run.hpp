@@ -11,6 +11,7 @@
 
 #include "backend/sliding_window.hpp"
 #include "core/camera.hpp"
+#include "io/trajectory_io.hpp"
 #include "map/keyframe.hpp"
 
 namespace eds {
@@ -25,5 +26,11 @@ void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel
                              const std::vector<RetiredKeyframe>& keyframes);
 // Reads dir/keyframes/; InputError naming the file (and line) for anything missing or malformed.
 ReferenceRun readReferenceRun(const std::filesystem::path& dir);
+// The parts, for readers that need only a few keyframes: the pinhole camera (size from the first
+// image), the index (t, T_w_kf per keyframe), and keyframe i (row i of the index).
+CameraModel readReferenceCamera(const std::filesystem::path& dir);
+Trajectory readReferenceIndex(const std::filesystem::path& dir);
+Keyframe readReferenceKeyframe(const std::filesystem::path& dir, const CameraModel& pinhole,
+                               const Trajectory& index, std::size_t i);
 
 }  // namespace eds

@@ -201,9 +201,10 @@ class TrackOnlyRun {
     return tr.failure;
   }
 
-  void writeDebugImage(const EventFrame& ef, const Vec6& nu) const {
+  void writeDebugImage(const EventFrame& ef, const SE3& T_ef_kf, const Vec6& nu) const {
     cv::Mat both;
-    cv::hconcat(toGray8(ef.delta), toGray8(tracker_.predictedImage(nu, cam_.width, cam_.height)), both);
+    cv::hconcat(toGray8(ef.delta), toGray8(tracker_.predictedImage(T_ef_kf, nu, cam_.width, cam_.height)),
+                both);
     char name[64];
     std::snprintf(name, sizeof name, "ef_%06zu.png", res_.event_frames - 1);
     cv::imwrite((cfg_.debug_dir / name).string(), both);
@@ -222,7 +223,7 @@ class TrackOnlyRun {
     // Coarse-to-fine only when the prediction is weak (first frames on a keyframe, after a failure).
     const TrackResult tr = tracker_.track(ef, T_est, nu_est, t_prev_ >= 0 ? 1 : 0);
     res_.track_ms.push_back(msSince(tt));
-    if (!cfg_.debug_dir.empty()) writeDebugImage(ef, nu_est);
+    if (!cfg_.debug_dir.empty()) writeDebugImage(ef, T_est, nu_est);
     const std::string failure = lostTrack(tr);
     if (!failure.empty()) {
       res_.failures.push_back({ef.t, failure});
