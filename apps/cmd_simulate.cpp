@@ -67,12 +67,7 @@ CameraModel makeCamera(const SimulateArgs& a) {
   if (std::sscanf(a.resolution.c_str(), "%dx%d", &w, &h) != 2 || w <= 0 || h <= 0 || w > 4096 || h > 4096)
     throw std::invalid_argument("--resolution must be WIDTHxHEIGHT (e.g. 240x180), got '" + a.resolution +
                                 "'");
-  // About 62 degrees of horizontal field of view, like a DAVIS240 with its standard lens (f = 200 px).
-  CameraModel cam;
-  cam.width = w, cam.height = h;
-  cam.fx = cam.fy = 0.832 * w;
-  cam.cx = (w - 1) / 2.0, cam.cy = (h - 1) / 2.0;
-  return cam;
+  return sim::defaultCamera(w, h);
 }
 
 void runSimulate(const SimulateArgs& a) {

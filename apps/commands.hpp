@@ -12,5 +12,6 @@ void addTrackCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addCalibrateCommand(CLI::App& app);
 void addReportCommand(CLI::App& app);
+void addStudyCommand(CLI::App& app);
 
 }  // namespace eds::app

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   eds::app::addRunCommand(app);
   eds::app::addCalibrateCommand(app);
   eds::app::addReportCommand(app);
+  eds::app::addStudyCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

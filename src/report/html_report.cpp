@@ -35,13 +35,6 @@ double num(const nlohmann::json& j, const char* key) {
   return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : 0.0;
 }
 
-std::string pageStart(const std::string& title) {
-  return "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><meta name='viewport' "
-         "content='width=device-width, initial-scale=1'><title>" +
-         escapeXml(title) + "</title><style>" + kReportCss + "</style></head><body><h1>" + escapeXml(title) +
-         "</h1><p class='sub'>written by eds " + escapeXml(versionString()) + "</p>";
-}
-
 std::string summarySection(const RunData& run) {
   const nlohmann::json& s = run.summary;
   const nlohmann::json& c = s.value("counts", nlohmann::json::object());
@@ -194,7 +187,7 @@ std::string gtNote(const ReportInputs& in, bool matched) {
 
 std::string singleReport(const ReportInputs& in) {
   const RunData& run = in.runs.front();
-  std::string page = pageStart("eds report: " + run.name);
+  std::string page = htmlPageStart("eds report: " + run.name);
   if (run.is_run) page += summarySection(run);
   const std::vector<TrajectoryEval> evals = in.gt ? evaluateRun(run, *in.gt) : std::vector<TrajectoryEval>{};
   eval::Sim3 align;
@@ -232,7 +225,7 @@ std::string singleReport(const ReportInputs& in) {
 std::string compareReport(const ReportInputs& in) {
   std::string names;
   for (const RunData& r : in.runs) names += (names.empty() ? "" : ", ") + r.name;
-  std::string page = pageStart("eds report: " + names);
+  std::string page = htmlPageStart("eds report: " + names);
   std::vector<std::vector<TrajectoryEval>> evals;
   for (const RunData& r : in.runs)
     evals.push_back(in.gt ? evaluateRun(r, *in.gt) : std::vector<TrajectoryEval>{});
@@ -267,6 +260,13 @@ std::string compareReport(const ReportInputs& in) {
 }
 
 }  // namespace
+
+std::string htmlPageStart(const std::string& title) {
+  return "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><meta name='viewport' "
+         "content='width=device-width, initial-scale=1'><title>" +
+         escapeXml(title) + "</title><style>" + kReportCss + "</style></head><body><h1>" + escapeXml(title) +
+         "</h1><p class='sub'>written by eds " + escapeXml(versionString()) + "</p>";
+}
 
 std::string buildReport(const ReportInputs& in) {
   if (in.runs.empty()) throw std::invalid_argument("buildReport: no run");

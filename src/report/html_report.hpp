@@ -19,6 +19,9 @@ struct ReportInputs {
 
 std::string buildReport(const ReportInputs& in);
 
+// The start of a report page: doctype, the inlined style sheet, the title as heading, eds's version.
+std::string htmlPageStart(const std::string& title);
+
 // Loads the runs (`eds run` folders or TUM files), takes the ground truth from `gt_file` or else the
 // first run's groundtruth.txt, and writes the page to `out` (atomically). InputError naming the file
 // for a run or ground truth that cannot be read.

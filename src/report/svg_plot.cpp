@@ -12,6 +12,10 @@ namespace {
 
 constexpr double kLeft = 62, kRight = 12, kTop = 28, kBottom = 44;  // margins around the plot area
 constexpr std::size_t kMaxPoints = 3000;                            // per series: thinned beyond
+// Inside each plot, so that one saved on its own (docs/images) looks as it does in a report.
+constexpr const char* kStyle =
+    "<style>text{font:11px system-ui,sans-serif;fill:#333}.plot-title{font-size:13px;font-weight:600}"
+    ".grid{stroke:#e6e6e6}</style>";
 
 std::string num(double v) {
   char b[32];
@@ -63,7 +67,8 @@ void drawAxes(std::ostringstream& s, const Axis& ax, const Axis& ay, const std::
 std::string open(int w, int h, const std::string& title) {
   std::ostringstream s;
   s << "<svg xmlns='http://www.w3.org/2000/svg' class='plot' width='" << w << "' height='" << h
-    << "' viewBox='0 0 " << w << " " << h << "'><title>" << escapeXml(title) << "</title><text x='" << w / 2
+    << "' viewBox='0 0 " << w << " " << h << "'><title>" << escapeXml(title) << "</title>" << kStyle
+    << "<rect width='100%' height='100%' fill='#fafafa'/><text x='" << w / 2
     << "' y='17' text-anchor='middle' class='plot-title'>" << escapeXml(title) << "</text>";
   return s.str();
 }

@@ -281,9 +281,43 @@ Scene deskScene(SceneBuilder& sb) {
   return sb.finish();
 }
 
+// A courtyard seen from standing height, for the sensitivity studies (the paper's "building-like
+// scenes"): a facade 11-14 m ahead, side facades receding from 4 m to it, the ground, and pillars and a
+// kiosk at 4-8 m. Depths span 4-14 m with the median several metres away.
+Scene buildingScene(SceneBuilder& sb) {
+  Rng& r = sb.rng();
+  const Vec3 lo = sb.lo(), hi = sb.hi();
+  const double ground_y = hi.y() + 1.6, height = 14.0, top_y = ground_y - height;
+  const double z_far = std::max(r.uniform(11.0, 14.0), hi.z() + 8.0), z_near = lo.z() - 2.0;
+  const double xl = lo.x() - r.uniform(4.0, 5.0), xr = hi.x() + r.uniform(4.0, 5.0);
+  const double xm = 0.5 * (xl + xr), ym = 0.5 * (ground_y + top_y), zm = 0.5 * (z_far + z_near);
+  const double W = xr - xl, D = z_far - z_near;
+  const double t_far = SceneBuilder::texelFor(z_far, 1.5), t_side = SceneBuilder::texelFor(7.0, 1.5);
+  sb.rect("far_facade", {xm, ym, z_far}, {1, 0, 0}, {0, 1, 0}, W, height, t_far,
+          sb.texture("bricks", W, height, t_far, 0.5), {0, 0, 1});
+  sb.rect("left_facade", {xl, ym, zm}, {0, 0, 1}, {0, 1, 0}, D, height, t_side,
+          sb.texture("mix", D, height, t_side, 0.5), {-1, 0, 0});
+  sb.rect("right_facade", {xr, ym, zm}, {0, 0, -1}, {0, 1, 0}, D, height, t_side,
+          sb.texture("stripes", D, height, t_side, 0.5), {1, 0, 0});
+  sb.rect("ground", {xm, ground_y, zm}, {1, 0, 0}, {0, 0, 1}, W, D, 0.04,
+          sb.texture("noise", W, D, 0.04, 0.5), {0, 1, 0});
+  const double deg = std::numbers::pi / 180.0;
+  std::vector<Box> boxes = {{"pillar0", -2.2, 4.5, ground_y, 0.5, 4.0, 0.5, 0},
+                            {"pillar1", 2.4, 6.0, ground_y, 0.5, 4.0, 0.5, 0},
+                            {"kiosk", 0.4, 8.0, ground_y, 2.0, 2.6, 1.4, 0}};
+  const char* kinds[] = {"checker", "blobs", "mix"};
+  int k = 0;
+  for (Box& b : boxes) {
+    b.x += r.uniform(-0.3, 0.3), b.z += r.uniform(-0.5, 0.5), b.yaw = r.uniform(-20, 20) * deg;
+    const double texel = SceneBuilder::texelFor(b.z, 1.0);
+    sb.box(b, texel, sb.texture(kinds[k++ % 3], std::max(b.w, b.d), std::max(b.h, b.d), texel, 0.5));
+  }
+  return sb.finish();
+}
+
 }  // namespace
 
-const char* presetNames() { return "planar, room, desk"; }
+const char* presetNames() { return "planar, room, desk, building"; }
 
 Scene makePreset(const std::string& name, const Motion& motion, std::uint64_t seed) {
   std::vector<Vec3> cams;
@@ -294,6 +328,7 @@ Scene makePreset(const std::string& name, const Motion& motion, std::uint64_t se
   if (name == "planar") return planarScene(sb);
   if (name == "room") return roomScene(sb);
   if (name == "desk") return deskScene(sb);
+  if (name == "building") return buildingScene(sb);
   throw std::invalid_argument("unknown preset '" + name + "' (known: " + presetNames() + ")");
 }
 

@@ -7,6 +7,14 @@
 
 namespace eds::sim {
 
+CameraModel defaultCamera(int width, int height) {
+  CameraModel cam;
+  cam.width = width, cam.height = height;
+  cam.fx = cam.fy = 0.832 * width;
+  cam.cx = (width - 1) / 2.0, cam.cy = (height - 1) / 2.0;
+  return cam;
+}
+
 Simulator::Simulator(const Scene& scene, const CameraModel& camera, const Motion& motion, SimConfig cfg)
     : scene_(scene), camera_(camera), motion_(motion), cfg_(cfg), renderer_(scene, camera, cfg.render) {
   if (cfg.fps < 0 || cfg.exposure_s < 0 || cfg.render_hz < 0 || !(cfg.max_px_per_step > 0))

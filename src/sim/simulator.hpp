@@ -34,6 +34,10 @@ class SimSink {
   virtual void onFrame(TimeNs t, const cv::Mat& intensity, const cv::Mat& depth) = 0;
 };
 
+// The camera `eds simulate` uses by default: pinhole, about 62 degrees of horizontal field of view like
+// a DAVIS240 with its standard lens (f = 200 px at 240 px wide), principal point at the centre.
+CameraModel defaultCamera(int width, int height);
+
 class Simulator {
  public:
   Simulator(const Scene& scene, const CameraModel& camera, const Motion& motion, SimConfig cfg);

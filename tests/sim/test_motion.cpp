@@ -218,7 +218,8 @@ struct PresetCase {
 };
 
 TEST(Presets, PlacedInFrontAndClearOfTheCamera) {
-  const PresetCase cases[] = {{"planar", 0.7, 1.3}, {"room", 0.8, 8.0}, {"desk", 0.3, 5.5}};
+  const PresetCase cases[] = {
+      {"planar", 0.7, 1.3}, {"room", 0.8, 8.0}, {"desk", 0.3, 5.5}, {"building", 3.0, 16.0}};
   for (const NamedMotion& nm : testMotions()) {
     const Motion motion(nm.traj);
     for (const PresetCase& pc : cases) {
@@ -276,7 +277,7 @@ TEST(Presets, RoomHasBoxesAndVarietyDeterministically) {
 
 TEST(Presets, TexturesLoadQuicklyAndRoundTripThroughYaml) {
   const Motion motion(handheldMotion(2.0, 1));
-  for (const char* name : {"planar", "room", "desk"}) {
+  for (const char* name : {"planar", "room", "desk", "building"}) {
     Scene s = makePreset(name, motion, 9);
     const auto t0 = std::chrono::steady_clock::now();
     s.loadTextures();
@@ -299,9 +300,9 @@ TEST(Presets, UnknownNameListsTheKnownOnes) {
     makePreset("kitchen", motion, 1);
     FAIL() << "no error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("planar, room, desk"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("planar, room, desk, building"), std::string::npos) << e.what();
   }
-  EXPECT_STREQ(presetNames(), "planar, room, desk");
+  EXPECT_STREQ(presetNames(), "planar, room, desk, building");
 }
 
 }  // namespace
