@@ -4,7 +4,8 @@
 # poster_6dof motion, smoothed, sigma_C = 0.03, background noise), events + frames and frames only,
 # at several frame rates, on the trajectories eds run writes (refined through the final keyframe poses).
 # Prints a markdown table; the real-time factor is the median of RUNS runs.
-# Usage: bench/odometry_table.sh [OUT_DIR]   (RUNS=3 by default; needs build/release and ../shared/data)
+# Usage: bench/odometry_table.sh [OUT_DIR]   (RUNS=3 by default; needs build/release and ../shared/data;
+# EDS_RUN_ARGS="--set KEY=VALUE ..." adds options to every `eds run`, for before/after tables)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 EDS=build/release/eds
@@ -26,7 +27,8 @@ row() {  # name sequence mode rate
   [ "$mode" = frames ] && args+=(--frames-only) && est=trajectory_frames.txt
   local rtfs=() dir="$OUT/run_$(basename "$seq")_${mode}_${rate}"
   for _ in $(seq "$RUNS"); do
-    "$EDS" run "$seq" "${args[@]}" --frame-rate "$rate" --out "$dir" > /dev/null 2>&1 || true
+    # shellcheck disable=SC2086  # EDS_RUN_ARGS holds several words
+    "$EDS" run "$seq" "${args[@]}" ${EDS_RUN_ARGS:-} --frame-rate "$rate" --out "$dir" > /dev/null 2>&1 || true
     rtfs+=("$(python3 -c "import json;print(json.load(open('$dir/summary.json'))['real_time_factor'])" 2>/dev/null || echo nan)")
   done
   local rtf

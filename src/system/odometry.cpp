@@ -18,6 +18,7 @@
 #include "system/event_frontend.hpp"
 #include "system/frame_frontend.hpp"
 #include "system/run_stats.hpp"
+#include "system/trajectory_smoothing.hpp"
 
 namespace eds {
 
@@ -351,7 +352,9 @@ class Odometry::Impl {
     res_.pinhole = core_.undistorter().pinhole();
     res_.map = window.retiredPoints();
     res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, window.retiredKeyframes());
-    res_.events_refined = refinedTrajectory(res_.events, res_.event_anchors, window.retiredKeyframes());
+    res_.events_refined =
+        smoothPositions(refinedTrajectory(res_.events, res_.event_anchors, window.retiredKeyframes()),
+                        cfg_.event_smoothing_s);
     TimeNs last_t = core_.lastTime();
     if (!res_.events.empty()) last_t = std::max(last_t, res_.events.back().t);
     res_.sequence_s = has_first_ ? toSeconds(last_t - res_.first_t) : 0.0;

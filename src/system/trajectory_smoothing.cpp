@@ -1,0 +1,38 @@
+#include "system/trajectory_smoothing.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <stdexcept>
+
+namespace eds {
+
+Trajectory smoothPositions(const Trajectory& traj, double half_window_s) {
+  Trajectory out = traj;
+  if (!(half_window_s > 0)) return out;
+  if (!std::is_sorted(traj.begin(), traj.end(),
+                      [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; }))
+    throw std::invalid_argument("smoothPositions: poses out of time order");
+  const TimeNs half = fromSeconds(half_window_s);
+  std::size_t lo = 0, hi = 0;  // the window [lo, hi) of pose i
+  for (std::size_t i = 0; i < traj.size(); ++i) {
+    while (traj[lo].t < traj[i].t - half) ++lo;
+    while (hi < traj.size() && traj[hi].t <= traj[i].t + half) ++hi;
+    if (hi - lo < 4) continue;  // a parabola through three points is no smoothing
+    // p(s) = a + b s + c s^2 with s = dt / half_window (conditioning); the fit's value at s = 0 is a.
+    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d B = Eigen::Matrix3d::Zero();  // columns: x, y, z right-hand sides
+    for (std::size_t k = lo; k < hi; ++k) {
+      const double s = toSeconds(traj[k].t - traj[i].t) / half_window_s;
+      const Eigen::Vector3d basis(1, s, s * s);
+      A.noalias() += basis * basis.transpose();
+      B.noalias() += basis * traj[k].T_w_c.translation().transpose();
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-9)) continue;  // all poses at one time
+    const Eigen::Matrix3d coef = ldlt.solve(B);
+    out[i].T_w_c = SE3(traj[i].T_w_c.so3(), coef.row(0).transpose());
+  }
+  return out;
+}
+
+}  // namespace eds
