@@ -7,8 +7,9 @@
 #include <optional>
 #include <stdexcept>
 
+#include "core/image_sampling.hpp"
 #include "core/parallel.hpp"
-#include "frontend/frame_tracker.hpp"  // sampleBilinear
+#include "core/robust.hpp"
 
 namespace eds {
 
@@ -16,10 +17,7 @@ namespace {
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
 constexpr int kFrameParams = 8;  // pose (6), a, b
 
-double huberCost(double r, double d) {
-  const double a = std::abs(r);
-  return a <= d ? 0.5 * r * r : d * (a - 0.5 * d);
-}
+constexpr double kLambdaFloor = 1e-8;
 
 }  // namespace
 
@@ -222,8 +220,9 @@ void PhotometricBA::addPrior(const BaPrior& prior, const std::vector<BaFrame>& f
 
 // One Levenberg-Marquardt step: damping on every diagonal entry, the Schur complement over the points,
 // the frames' step df and the points' new inverse depths. False if the step is not finite.
-bool PhotometricBA::dampedStep(const NormalEquations& ne, double lambda, int dim, const std::vector<double>& rho,
-                               StepScratch& w, Eigen::VectorXd& df, std::vector<double>& rho_new) const {
+bool PhotometricBA::dampedStep(const NormalEquations& ne, double lambda, int dim,
+                               const std::vector<double>& rho, StepScratch& w, Eigen::VectorXd& df,
+                               std::vector<double>& rho_new) const {
   const std::size_t np = rho.size();
   w.S = ne.Hff;
   w.S.diagonal() *= 1.0 + lambda;
@@ -297,7 +296,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   for (std::size_t i = 0; i < np; ++i) rho[i] = points[i].inv_depth;
 
   double c = cost(frames, points, rho, gw, prior, &stats.initial_rmse, &stats.residuals);
-  double lambda = cfg_.lambda_initial;
+  LmDamping lm(cfg_.lambda_initial, kLambdaFloor);
   StepScratch scratch{Eigen::MatrixXd(dim, dim), Eigen::VectorXd(dim), std::vector<double>(np)};
   Eigen::VectorXd df;
   NormalEquations ne;
@@ -306,8 +305,8 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     if (prior) addPrior(*prior, frames, slot, ne);
     bool accepted = false;
     for (int tries = 0; tries < 5 && !accepted; ++tries) {
-      if (!dampedStep(ne, lambda, dim, rho, scratch, df, rho_new)) {
-        lambda *= 10;
+      if (!dampedStep(ne, lm.lambda(), dim, rho, scratch, df, rho_new)) {
+        lm.rejected();
         continue;
       }
       std::vector<BaFrame> f_new = frames;
@@ -325,10 +324,10 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         accepted = true;
         const bool converged = c - c_new < 1e-6 * c;
         c = c_new;
-        lambda = std::max(1e-8, lambda * 0.3);
+        lm.accepted();
         if (converged) it = cfg_.iterations;
       } else {
-        lambda *= 10;
+        lm.rejected();
       }
     }
     if (!accepted) break;
@@ -382,8 +381,7 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
           continue;
         const int sh = slot[p.host], st = slot[t];
         for (int k = 0; k < 8; ++k) {
-          const double a = std::abs(r[k]);
-          w[k] = gw[i].w[k] * (a <= d ? 1.0 : d / a);
+          w[k] = gw[i].w[k] * huberWeight(r[k], d);
         }
         // The 8 pattern rows at once: J^T W J blocks as small matrix products.
         Jh = J.leftCols<8>();

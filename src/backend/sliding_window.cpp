@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "frontend/frame_tracker.hpp"  // sampleBilinear
+#include "core/image_sampling.hpp"
 
 namespace eds {
 

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/events.hpp"
-#include "core/undistorter.hpp"
 #include "core/reflect.hpp"
+#include "core/undistorter.hpp"
 
 namespace eds {
 
@@ -45,7 +45,8 @@ struct EventFrameConfig {
   std::size_t lookahead() const;  // events after a packet that its build reads (0: compensation off)
 };
 
-EDS_FIELDS(EventFrameConfig, num_events, overlap, sigma_frac, blur, reversal_compensation, compensation_lookahead)
+EDS_FIELDS(EventFrameConfig, num_events, overlap, sigma_frac, blur, reversal_compensation,
+           compensation_lookahead)
 
 struct EventFrame {
   TimeNs t = 0;  // the median event's time
@@ -98,9 +99,5 @@ class EventFrameBuilder {
   std::uint64_t frontier_ = 0;          // stream index up to which the bookkeeping has run
   std::uint64_t last_packet_ = 0;       // the last packet's start
 };
-
-// Bicubic (Catmull-Rom) sample of a CV_32F image with its derivatives in x and y; (x, y) must be at
-// least 1 px inside the border (callers check with inside(..., 1.0)); pixel centres at integers.
-double sampleBicubic(const cv::Mat& img, double x, double y, double* dx = nullptr, double* dy = nullptr);
 
 }  // namespace eds

@@ -6,6 +6,9 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "core/image_sampling.hpp"
+#include "core/robust.hpp"
+
 namespace eds {
 
 void EventTrackerConfig::validate() const {
@@ -124,12 +127,11 @@ int EventTracker::evaluate(const cv::Mat& delta, const SE3& T_ef_kf, const Vec6&
 }
 
 namespace {
-double huberCost(const Eigen::VectorXd& r, double d) {
+constexpr double kLambdaFloor = 1e-7;
+
+double huberSum(const Eigen::VectorXd& r, double d) {
   double c = 0;
-  for (Eigen::Index i = 0; i < r.size(); ++i) {
-    const double a = std::abs(r[i]);
-    c += a <= d ? 0.5 * a * a : d * (a - 0.5 * d);
-  }
+  for (Eigen::Index i = 0; i < r.size(); ++i) c += eds::huberCost(r[i], d);
   return c;
 }
 
@@ -183,17 +185,14 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
     nu.normalize();
     n = evaluate(img, T_ef_kf, nu, r, &J);
   }
-  double lambda = cfg_.lambda_initial;
+  LmDamping lm(cfg_.lambda_initial, kLambdaFloor);
   const double d = huber_;
-  double cost = huberCost(r, d) + priorCost(prior, data_var_, T_ef_kf);
+  double cost = huberSum(r, d) + priorCost(prior, data_var_, T_ef_kf);
   int it = 0;
   for (; it < cfg_.max_iterations; ++it) {
     // Normal equations with the IRLS weights of the Huber norm, as two small GEMMs.
     Eigen::VectorXd w(r.size());
-    for (Eigen::Index i = 0; i < r.size(); ++i) {
-      const double a = std::abs(r[i]);
-      w[i] = a <= d ? 1.0 : d / a;
-    }
+    for (Eigen::Index i = 0; i < r.size(); ++i) w[i] = huberWeight(r[i], d);
     const Eigen::MatrixXd JtW = (J.array().colwise() * w.array()).matrix().transpose();
     Eigen::Matrix<double, 12, 12> H = JtW * J;
     Eigen::Matrix<double, 12, 1> g = JtW * r;
@@ -201,7 +200,7 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
     bool improved = false;
     for (int tries = 0; tries < 6 && !improved; ++tries) {
       Eigen::Matrix<double, 12, 12> Hd = H;
-      Hd.diagonal() += lambda * H.diagonal() + Eigen::Matrix<double, 12, 1>::Constant(1e-12);
+      Hd.diagonal() += lm.lambda() * H.diagonal() + Eigen::Matrix<double, 12, 1>::Constant(1e-12);
       const Eigen::Matrix<double, 12, 1> delta = -Hd.ldlt().solve(g);
       if (!delta.allFinite()) break;
       const SE3 T_new = SE3::exp(delta.head<6>()) * T_ef_kf;
@@ -211,7 +210,7 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
       Eigen::MatrixXd J_new;
       const int n_new = evaluate(img, T_new, nu_new, r_new, &J_new);
       const double cost_new =
-          n_new >= cfg_.min_points ? huberCost(r_new, d) + priorCost(prior, data_var_, T_new) : 1e300;
+          n_new >= cfg_.min_points ? huberSum(r_new, d) + priorCost(prior, data_var_, T_new) : 1e300;
       if (cost_new < cost) {
         const double gain = cost - cost_new;
         T_ef_kf = T_new;
@@ -220,12 +219,12 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
         J = std::move(J_new);
         n = n_new;
         cost = cost_new;
-        lambda = std::max(1e-7, lambda * 0.3);
+        lm.accepted();
         improved = true;
         // Converged when the cost barely moves or the step is far below what the events resolve.
         if (gain < 1e-4 * cost || delta.head<6>().norm() < 1e-6) it = cfg_.max_iterations;
       } else {
-        lambda *= 10;
+        lm.rejected();
       }
     }
     if (!improved) break;

@@ -6,9 +6,15 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "core/image_sampling.hpp"
+#include "core/robust.hpp"
+
 namespace eds {
 
 namespace {
+
+// Damping of each pyramid level's solve (core/robust.hpp's schedule).
+constexpr double kLambdaInitial = 1e-3, kLambdaFloor = 1e-6;
 // DSO's residual pattern #8.
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
 }  // namespace
@@ -103,32 +109,32 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   const double d = cfg_.huber;
   const auto cost = [d](const std::vector<double>& rr) {
     double c = 0;
-    for (double x : rr) c += std::abs(x) <= d ? 0.5 * x * x : d * (std::abs(x) - 0.5 * d);
+    for (double x : rr) c += huberCost(x, d);
     return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
   };
   const int start = levels > 0 ? std::min(levels, cfg_.levels) - 1 : cfg_.levels - 1;
   for (int l = start; l >= 0; --l) {
-    double lambda = 1e-3;
+    LmDamping lm(kLambdaInitial, kLambdaFloor);
     if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
     double c0 = cost(r);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
       Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
       Eigen::Matrix<double, 8, 1> g = Eigen::Matrix<double, 8, 1>::Zero();
       for (std::size_t i = 0; i < r.size(); ++i) {
-        const double w = std::abs(r[i]) <= d ? 1.0 : d / std::abs(r[i]);
+        const double w = huberWeight(r[i], d);
         H.noalias() += w * J[i].transpose() * J[i];
         g.noalias() += w * r[i] * J[i].transpose();
       }
       bool improved = false;
       for (int tries = 0; tries < 5 && !improved; ++tries) {
         Eigen::MatrixXd Hs = H.topLeftCorner(np, np);
-        Hs.diagonal() *= 1.0 + lambda;
+        Hs.diagonal() *= 1.0 + lm.lambda();
         const Eigen::VectorXd delta = -Hs.ldlt().solve(g.head(np));
         if (!delta.allFinite()) break;
         const SE3 T_new = SE3::exp(delta.head<6>()) * T;
         const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
         if (evaluate(l, img[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
-          lambda *= 10;
+          lm.rejected();
           continue;
         }
         const double c1 = cost(r_new);
@@ -138,11 +144,11 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
           J.swap(J_new);
           const bool converged = c0 - c1 < cfg_.convergence * c0 || delta.head<6>().norm() < 1e-7;
           c0 = c1;
-          lambda = std::max(1e-6, lambda * 0.3);
+          lm.accepted();
           improved = !converged;
           if (converged) it = cfg_.max_iterations;
         } else {
-          lambda *= 10;
+          lm.rejected();
         }
       }
       if (!improved) break;

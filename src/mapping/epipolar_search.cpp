@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "frontend/frame_tracker.hpp"  // sampleBilinear
+#include "core/image_sampling.hpp"
 
 namespace eds {
 

@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "core/image_sampling.hpp"
 #include "core/log.hpp"
-#include "frontend/frame_tracker.hpp"  // sampleBilinear
 
 namespace eds {
 
@@ -126,11 +126,11 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
   if (logEnabled(LogLevel::kDebug)) {
     const Vec6 dev = motion ? Vec6((T * motion->T_ef_kf.inverse()).log()) : Vec6::Zero();
     logf(LogLevel::kDebug,
-                 "[events] t %.3f corr %.3f it %d pts %d prior %d sigma_t %.4f dev_t %.4f dev_r %.4f "
-                 "init_dev_t %.4f",
-                 toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, motion != nullptr,
-                 motion ? motion->sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
-                 (T * T_init.inverse()).translation().norm());
+         "[events] t %.3f corr %.3f it %d pts %d prior %d sigma_t %.4f dev_t %.4f dev_r %.4f "
+         "init_dev_t %.4f",
+         toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, motion != nullptr,
+         motion ? motion->sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
+         (T * T_init.inverse()).translation().norm());
   }
   if (!tr.ok) {
     if (failure) *failure = tr.failure;

@@ -4,6 +4,7 @@
 #include <random>
 
 #include "backend/photometric_ba.hpp"
+#include "core/image_sampling.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "map/keyframe.hpp"

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "core/image_sampling.hpp"
 #include "frontend/event_frame.hpp"
 #include "frontend/event_packets.hpp"
 #include "frontend/event_tracker.hpp"
