@@ -12,7 +12,7 @@
 #include <exception>
 #include <vector>
 
-#include "system/sim_event_frame_case.hpp"
+#include "support/sim_event_frame_case.hpp"
 
 namespace {
 

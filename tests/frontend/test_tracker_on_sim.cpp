@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "frontend/event_tracker.hpp"
-#include "system/sim_event_frame_case.hpp"
+#include "support/sim_event_frame_case.hpp"
 
 namespace eds {
 namespace {

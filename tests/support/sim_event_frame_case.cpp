@@ -1,4 +1,4 @@
-#include "system/sim_event_frame_case.hpp"
+#include "support/sim_event_frame_case.hpp"
 
 #include <stdexcept>
 #include <string>
