@@ -84,7 +84,7 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
     const double uk = u + kPattern[k][0], vk = v + kPattern[k][1];
     if (uk < 0 || vk < 0 || uk >= W - 1 || vk >= Hh - 1) return false;
     const double I_h = host_values ? host_values[k] : static_cast<double>(sampleBilinear(H.image, uk, vk));
-    const Vec3 x_h((uk - cam_.cx) / cam_.fx, (vk - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x_h = cam_.pinholeRay(uk, vk);
     const Vec3 X_h = x_h / rho;
     const Vec3 X_t = R_t_h * X_h + T_t_h.translation();
     if (X_t.z() <= 1e-6) return false;

@@ -115,7 +115,7 @@ void SlidingWindow::retirePointsOf(int f) {
   const BaFrame& h = frames_[f];
   for (const BaPoint& p : points_) {
     if (p.host != f || p.outlier || !(p.inv_depth > 0)) continue;
-    const Vec3 x((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x = cam_.pinholeRay(p.u, p.v);
     retired_pts_.push_back({h.T_w_c * (x / p.inv_depth), sampleBilinear(h.image, p.u, p.v)});
   }
 }
@@ -144,7 +144,7 @@ std::vector<KeyframePoint> SlidingWindow::pointsIn(int f) const {
   Eigen::Matrix<double, 8, 1> r;
   for (const BaPoint& p : points_) {
     if (p.outlier || !(p.inv_depth > 0)) continue;
-    const Vec3 x((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x = cam_.pinholeRay(p.u, p.v);
     const Vec3 q = T_n_w * (frames_[p.host].T_w_c * (x / p.inv_depth));
     if (q.z() <= 1e-6) continue;
     const double u = cam_.fx * q.x() / q.z() + cam_.cx, v = cam_.fy * q.y() / q.z() + cam_.cy;
@@ -168,7 +168,7 @@ std::vector<Vec3> SlidingWindow::worldPoints() const {
   std::vector<Vec3> out;
   for (const BaPoint& p : points_) {
     if (p.outlier || !(p.inv_depth > 0)) continue;
-    const Vec3 x((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x = cam_.pinholeRay(p.u, p.v);
     out.push_back(frames_[p.host].T_w_c * (x / p.inv_depth));
   }
   return out;

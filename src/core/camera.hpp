@@ -32,6 +32,9 @@ struct CameraModel {
   Vec2 project(const Vec3& p_c) const;
   // Raw pixel -> point on the normalized plane (x, y, 1) of its ray.
   Vec3 unproject(const Vec2& pixel) const;
+  // The same for a camera without distortion (the undistorted grid the trackers work on), inline for
+  // per-point loops.
+  Vec3 pinholeRay(double u, double v) const { return {(u - cx) / fx, (v - cy) / fy, 1.0}; }
 
   // Raw pixel -> pixel of the undistorted pinhole image with the same fx, fy, cx, cy.
   Vec2 undistortPixel(const Vec2& pixel) const;

@@ -28,8 +28,8 @@ inline Eigen::Matrix<double, 2, 6> featureSensitivity(double x, double y, double
 
 // The row a with ΔL̂ = a · ν Δt for a keyframe pixel (u, v) with log gradient (gx, gy) and inverse depth.
 inline Row6 egmRow(const CameraModel& pinhole, double u, double v, double gx, double gy, double inv_depth) {
-  const double x = (u - pinhole.cx) / pinhole.fx, y = (v - pinhole.cy) / pinhole.fy;
-  const Eigen::Matrix<double, 2, 6> J = featureSensitivity(x, y, 1.0 / inv_depth);
+  const Vec3 ray = pinhole.pinholeRay(u, v);
+  const Eigen::Matrix<double, 2, 6> J = featureSensitivity(ray.x(), ray.y(), 1.0 / inv_depth);
   return -(gx * pinhole.fx * J.row(0) + gy * pinhole.fy * J.row(1));
 }
 

@@ -30,9 +30,7 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
   px_kf_.clear();
   for (const KeyframePoint& p : kf.points) {
     if (!(p.inv_depth > 0) || !std::isfinite(p.inv_depth)) continue;
-    const double x = (p.u - cam_.cx) / cam_.fx, y = (p.v - cam_.cy) / cam_.fy;
-    const double z = 1.0 / p.inv_depth;
-    p_kf_.emplace_back(x * z, y * z, z);
+    p_kf_.push_back(cam_.pinholeRay(p.u, p.v) * (1.0 / p.inv_depth));
     a_.push_back(egmRow(cam_, p.u, p.v, p.gx, p.gy, p.inv_depth));
     px_kf_.emplace_back(p.u, p.v);
   }

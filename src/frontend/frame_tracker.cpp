@@ -60,7 +60,7 @@ void FrameTracker::setKeyframe(const Keyframe& kf) {
         if (u < 0 || v < 0 || u >= c.width - 1 || v >= c.height - 1) continue;
         const double z = 1.0 / p.inv_depth;
         LevelPoint lp;
-        lp.p_kf = Vec3((u - c.cx) / c.fx * z, (v - c.cy) / c.fy * z, z);
+        lp.p_kf = c.pinholeRay(u, v) * z;
         lp.ref = sampleBilinear(img[l], u, v);
         points_[l].push_back(lp);
       }

@@ -61,7 +61,7 @@ double Bootstrap::translationParallax(const SE3& T_c_ref) const {
   int n = 0;
   for (const KeyframePoint& p : ref_.points) {
     if (!(p.inv_depth > 0)) continue;
-    const Vec3 x((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x = cam_.pinholeRay(p.u, p.v);
     const Vec3 q0 = R * x, q1 = q0 + t * p.inv_depth;  // same ray, scaled by ρ: no division by ρ
     if (q0.z() <= 1e-9 || q1.z() <= 1e-9) continue;
     const double du = cam_.fx * (q1.x() / q1.z() - q0.x() / q0.z());
@@ -83,7 +83,7 @@ bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image) {
   if (g && g->planar) geo_state_ = GeoState::kPlanar;
   if (g && logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg",
-                 frames_.size(), g->planar, g->inliers, g->parallax_deg);
+         frames_.size(), g->planar, g->inliers, g->parallax_deg);
   if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
   if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
   return false;
@@ -195,8 +195,8 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
   const int n_after = static_cast<int>(frames_.size()) - 1;
   if (logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f",
-                 n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
-                 fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
+         n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
+         fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
   if (diverged || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
     // The geometric path may still make it from this reference (large motion between sparse frames).
     frames_.pop_back();
@@ -269,8 +269,8 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   const BaStats st = PhotometricBA(cam_, bc).optimize(fr, pts);
   if (logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug,
-                 "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f",
-                 g.inliers, g.points.size(), pts.size(), st.initial_rmse, st.final_rmse);
+         "bootstrap: geometric init, %d inliers, %zu triangulated, %zu points, rmse %.4f -> %.4f", g.inliers,
+         g.points.size(), pts.size(), st.initial_rmse, st.final_rmse);
   if (st.final_rmse > cfg_.max_rmse) return false;
   for (KeyframePoint& p : ref.points) p.inv_depth = 0;
   int inliers = 0;

@@ -74,8 +74,8 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   // Triangulation by the midpoint-free linear method on normalized coordinates (depth in the reference).
   for (std::size_t i = 0; i < k; ++i) {
     if (!mask_e.at<unsigned char>(static_cast<int>(i))) continue;
-    const Vec3 x0((ref_[i].x - cam_.cx) / cam_.fx, (ref_[i].y - cam_.cy) / cam_.fy, 1.0);
-    const Vec3 x1((cur_[i].x - cam_.cx) / cam_.fx, (cur_[i].y - cam_.cy) / cam_.fy, 1.0);
+    const Vec3 x0 = cam_.pinholeRay(ref_[i].x, ref_[i].y);
+    const Vec3 x1 = cam_.pinholeRay(cur_[i].x, cur_[i].y);
     // z·(R x0) + t = s·x1: least squares for (z, s).
     Eigen::Matrix<double, 3, 2> A;
     A.col(0) = Re * x0;

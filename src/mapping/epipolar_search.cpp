@@ -39,7 +39,7 @@ std::vector<EpipolarMatch> epipolarSearch(const SearchFrame& host, const SearchF
     if (p.x < 2 || p.y < 2 || p.x >= Ih.cols - 2 || p.y >= Ih.rows - 2) continue;
     for (int k = 0; k < 8; ++k)
       ref_val[k] = e * (Ih.at<float>(p.y + kPattern[k][1], p.x + kPattern[k][0]) - host.b) + ref.b;
-    const Vec3 Rx = R * Vec3((p.x - cam.cx) / cam.fx, (p.y - cam.cy) / cam.fy, 1.0);
+    const Vec3 Rx = R * cam.pinholeRay(p.x, p.y);
     double u0, v0, u1, v1;
     if (!proj(Rx, rho_lo, u0, v0) || !proj(Rx, rho_hi, u1, v1)) continue;
     const double len = std::hypot(u1 - u0, v1 - v0);

@@ -19,7 +19,7 @@ Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const Came
   int n = 0, in = 0;
   for (const KeyframePoint& p : pts) {
     if (!(p.inv_depth > 0)) continue;
-    const Vec3 x((p.u - cam.cx) / cam.fx, (p.v - cam.cy) / cam.fy, 1.0);
+    const Vec3 x = cam.pinholeRay(p.u, p.v);
     const Vec3 q_rt = R * x + t * p.inv_depth, q_t = x + t * p.inv_depth;  // scaled by ρ
     ++n;
     if (q_rt.z() <= 1e-9 || q_t.z() <= 1e-9) continue;
@@ -148,9 +148,7 @@ void FrameFrontend::setPending(const SE3& T_w_new, double a) {
   std::vector<Vec3> p_w;
   p_w.reserve(ref_.points.size());
   for (const KeyframePoint& p : ref_.points)
-    if (p.inv_depth > 0)
-      p_w.push_back(T_w_kf_ *
-                    (Vec3((p.u - cam_.cx) / cam_.fx, (p.v - cam_.cy) / cam_.fy, 1.0) / p.inv_depth));
+    if (p.inv_depth > 0) p_w.push_back(T_w_kf_ * (cam_.pinholeRay(p.u, p.v) / p.inv_depth));
   for (const ProjectedPoint& q : projectPoints(p_w, T_w_new, cam_)) {
     KeyframePoint kp;
     kp.u = q.u, kp.v = q.v, kp.inv_depth = q.inv_depth;
