@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
@@ -33,30 +34,56 @@ bool step(const std::string& cmd, std::string& failed) {
   return false;
 }
 
-// One simulated sequence and its runs for the whole suite (each takes seconds).
+// The simulated sequence and its two runs, written into `dir`.
+void makeRuns(const fs::path& dir, std::string& failed) {
+  const fs::path seq = dir / "seq";
+  step(kEds.string() +
+           " simulate --preset room --duration 3 --fps 20 --contrast-noise 0.03 --noise-rate 0.1 "
+           "--seed 11 --out " +
+           seq.string(),
+       failed);
+  step(kEds.string() + " run " + seq.string() + " --out " + (dir / "run").string() + " --report", failed);
+  step(kEds.string() + " run " + seq.string() + " --frames-only --out " + (dir / "frames_only").string(),
+       failed);
+}
+
+// The runs are made once per eds program and shared, read-only, by the suite's cases: ctest runs each
+// case in its own process, and under the sanitizers the runs take a minute. The program's size and
+// time stamp name the folder, so a rebuilt program makes new runs; the loser of a race uses the
+// winner's folder.
+fs::path sharedRuns(std::string& failed) {
+  const fs::path cache = fs::path(EDS_BINARY_DIR) / "test_cache";
+  const std::string key = "report_" + std::to_string(fs::last_write_time(kEds).time_since_epoch().count()) +
+                          "_" + std::to_string(fs::file_size(kEds));
+  if (fs::exists(cache / key / "complete")) return cache / key;
+  const fs::path tmp = test::tempDir("report");
+  makeRuns(tmp, failed);
+  if (!failed.empty()) return tmp;
+  std::ofstream(tmp / "complete") << "made by " << kEds.string() << "\n";
+  std::error_code ec;
+  fs::create_directories(cache, ec);
+  for (const auto& old : fs::directory_iterator(cache, ec))  // an older program's runs
+    if (old.path().filename().string().starts_with("report_") && old.path().filename() != key)
+      fs::remove_all(old.path(), ec);
+  fs::rename(tmp, cache / key, ec);  // fails when another process was first, or across file systems
+  return fs::exists(cache / key / "complete") ? cache / key : tmp;
+}
+
+// Each case writes into its own folder; the runs are shared.
 class Report : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    if (!fs::exists(kEds)) return;
-    dir_ = new fs::path(test::tempDir("report"));
-    const fs::path seq = *dir_ / "seq";
     failed_ = new std::string;
-    step(kEds.string() +
-             " simulate --preset room --duration 3 --fps 20 --contrast-noise 0.03 --noise-rate 0.1 "
-             "--seed 11 --out " +
-             seq.string(),
-         *failed_);
-    step(kEds.string() + " run " + seq.string() + " --out " + (*dir_ / "run").string() + " --report",
-         *failed_);
-    step(kEds.string() + " run " + seq.string() + " --frames-only --out " + (*dir_ / "frames_only").string(),
-         *failed_);
+    if (fs::exists(kEds)) runs_ = new fs::path(sharedRuns(*failed_));
   }
   void SetUp() override {
     EDS_REQUIRE_AVAILABLE(fs::exists(kEds), "the eds program");
     ASSERT_TRUE(failed_->empty()) << "failed: " << *failed_;
+    out_ = test::tempDir("report_out");
   }
-  static inline fs::path* dir_ = nullptr;
+  static inline fs::path* runs_ = nullptr;
   static inline std::string* failed_ = nullptr;
+  fs::path out_;
 };
 
 std::string reportOf(const std::string& args, const fs::path& out) {
@@ -66,7 +93,7 @@ std::string reportOf(const std::string& args, const fs::path& out) {
 }
 
 TEST_F(Report, RunReportStatesTheAccuracyEdsEvalComputes) {
-  const fs::path run_dir = *dir_ / "run";
+  const fs::path run_dir = *runs_ / "run";
   const std::string html = test::fileText(run_dir / "report.html");  // written by `eds run --report`
   ASSERT_FALSE(html.empty());
   const eval::AteResult ate = eval::evaluateAteFiles(run_dir / "groundtruth.txt",
@@ -90,8 +117,9 @@ TEST_F(Report, RunReportStatesTheAccuracyEdsEvalComputes) {
 }
 
 TEST_F(Report, WithoutGroundTruthTheReportSaysSoAndDrawsTheEstimate) {
-  fs::remove(*dir_ / "frames_only" / "groundtruth.txt");
-  const std::string html = reportOf((*dir_ / "frames_only").string(), *dir_ / "no_gt.html");
+  fs::copy(*runs_ / "frames_only", out_ / "frames_only", fs::copy_options::recursive);
+  fs::remove(out_ / "frames_only" / "groundtruth.txt");
+  const std::string html = reportOf((out_ / "frames_only").string(), out_ / "no_gt.html");
   EXPECT_NE(html.find("No ground truth"), std::string::npos);
   EXPECT_EQ(html.find("ATE RMSE"), std::string::npos);
   EXPECT_NE(html.find("data-label='frame poses'"), std::string::npos);
@@ -99,25 +127,25 @@ TEST_F(Report, WithoutGroundTruthTheReportSaysSoAndDrawsTheEstimate) {
 }
 
 TEST_F(Report, CompareHasOneRowPerRunWithItsOwnAccuracy) {
-  const fs::path gt = *dir_ / "seq" / "groundtruth.txt";
+  const fs::path gt = *runs_ / "seq" / "groundtruth.txt";
   const std::string html =
-      reportOf("--compare " + (*dir_ / "run").string() + " " + (*dir_ / "frames_only").string() + " " +
-                   (*dir_ / "frames_only" / "trajectory_frames.txt").string() + " --gt " + gt.string(),
-               *dir_ / "compare.html");
+      reportOf("--compare " + (*runs_ / "run").string() + " " + (*runs_ / "frames_only").string() + " " +
+                   (*runs_ / "frames_only" / "trajectory_frames.txt").string() + " --gt " + gt.string(),
+               out_ / "compare.html");
   for (const char* name : {"<td>run</td>", "<td>frames_only</td>", "<td>trajectory_frames.txt</td>"})
     EXPECT_NE(html.find(name), std::string::npos) << name;
   const eval::AteResult fo =
-      eval::evaluateAteFiles(gt, *dir_ / "frames_only" / "trajectory_frames.txt", eval::EvalConfig{});
+      eval::evaluateAteFiles(gt, *runs_ / "frames_only" / "trajectory_frames.txt", eval::EvalConfig{});
   char cm[32];
   std::snprintf(cm, sizeof cm, "<td>%.3f</td>", 100 * fo.trans.rmse);
   EXPECT_NE(html.find(cm), std::string::npos);
 }
 
 TEST_F(Report, BadInputsAreNamed) {
-  const std::string out = (*dir_ / "bad.html").string();
-  EXPECT_NE(run(kEds.string() + " report " + (*dir_ / "seq").string() + " --out " + out), 0);  // not a run
-  EXPECT_NE(run(kEds.string() + " report " + (*dir_ / "run").string() + " " +
-                (*dir_ / "frames_only").string() + " --out " + out),
+  const std::string out = (out_ / "bad.html").string();
+  EXPECT_NE(run(kEds.string() + " report " + (*runs_ / "seq").string() + " --out " + out), 0);  // not a run
+  EXPECT_NE(run(kEds.string() + " report " + (*runs_ / "run").string() + " " +
+                (*runs_ / "frames_only").string() + " --out " + out),
             0);  // several runs without --compare
   EXPECT_FALSE(fs::exists(out));
 }
@@ -141,18 +169,20 @@ nlohmann::json openInBrowser(const fs::path& html, const fs::path& shot) {
 TEST_F(Report, OpensInChromiumWithoutErrorsAndDrawsEverything) {
   EDS_REQUIRE_AVAILABLE(browserAvailable(), "Debian chromium, chromium-driver and python3-selenium");
   const char* keep = std::getenv("EDS_REPORT_SCREENSHOTS");  // a folder to keep the screenshots in
-  const fs::path shots = keep ? fs::path(keep) : *dir_;
+  const fs::path shots = keep ? fs::path(keep) : out_;
   fs::create_directories(shots);
-  reportOf((*dir_ / "frames_only").string(), *dir_ / "no_gt.html");
-  reportOf("--compare " + (*dir_ / "run").string() + " " + (*dir_ / "frames_only").string() + " --gt " +
-               (*dir_ / "seq" / "groundtruth.txt").string(),
-           *dir_ / "compare.html");
+  fs::copy(*runs_ / "frames_only", out_ / "frames_only", fs::copy_options::recursive);
+  fs::remove(out_ / "frames_only" / "groundtruth.txt");
+  reportOf((out_ / "frames_only").string(), out_ / "no_gt.html");
+  reportOf("--compare " + (*runs_ / "run").string() + " " + (*runs_ / "frames_only").string() + " --gt " +
+               (*runs_ / "seq" / "groundtruth.txt").string(),
+           out_ / "compare.html");
   struct Page {
     fs::path html;
     int min_plots, min_images;
   };
-  for (const Page& page : {Page{*dir_ / "run" / "report.html", 5, 8}, Page{*dir_ / "no_gt.html", 3, 4},
-                           Page{*dir_ / "compare.html", 4, 0}}) {
+  for (const Page& page : {Page{*runs_ / "run" / "report.html", 5, 8}, Page{out_ / "no_gt.html", 3, 4},
+                           Page{out_ / "compare.html", 4, 0}}) {
     const fs::path shot =
         shots / (page.html.parent_path().filename().string() + "_" + page.html.stem().string() + ".png");
     const nlohmann::json s = openInBrowser(page.html, shot);
