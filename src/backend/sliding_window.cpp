@@ -151,10 +151,10 @@ std::vector<KeyframePoint> SlidingWindow::pointsIn(int f) const {
     if (u < 2 || v < 2 || u > cam_.width - 3 || v > cam_.height - 3) continue;
     // Only what keyframe f sees (its photometric error there is an inlier's), as DSO builds
     // its tracking reference: a point hidden behind a nearer surface would give the trackers that
-    // surface's texture at the hidden point's depth.
-    if (cfg_.reference_inliers_only && p.host != f &&
-        !(ba_.evaluate(frames_, p, f, r, nullptr) &&
-          std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy))
+    // surface's texture at the hidden point's depth (with DSO's removal rule the window's older
+    // keyframes see behind today's occluders).
+    if (p.host != f && !(ba_.evaluate(frames_, p, f, r, nullptr) &&
+                         std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy))
       continue;
     KeyframePoint kp;
     kp.u = static_cast<float>(u), kp.v = static_cast<float>(v);

@@ -9,9 +9,9 @@
 
 #include "backend/photometric_ba.hpp"
 #include "core/camera.hpp"
+#include "core/reflect.hpp"
 #include "core/time.hpp"
 #include "map/keyframe.hpp"
-#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -41,14 +41,11 @@ struct BackendConfig {
   // with the baseline. kOldest: the oldest leaves (docs/experiments.md compares them).
   WindowRemoval removal = WindowRemoval::kDso;
   double min_visible = 0.05;
-  // The tracking reference (pointsInNewest) holds only points whose error in the newest keyframe is an
-  // inlier's (needed with DSO's rule: the window's older keyframes see behind today's occluders).
-  bool reference_inliers_only = true;
   BaConfig ba;
   void validate() const;
 };
 
-EDS_FIELDS(BackendConfig, window, points_per_keyframe, marginalize, removal, min_visible, reference_inliers_only, ba)
+EDS_FIELDS(BackendConfig, window, points_per_keyframe, marginalize, removal, min_visible, ba)
 
 struct MapPoint {
   Vec3 p_w;
