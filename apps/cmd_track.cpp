@@ -96,16 +96,18 @@ void addTrackCommand(CLI::App& app) {
   a->overlap =
       cmd->add_option("--overlap", a->cfg.event_frame.overlap, "Overlap of consecutive event frames, [0, 1)")
           ->capture_default_str();
-  cmd->add_option("--tile", a->cfg.points.tile, "Point selection tile size, px")->capture_default_str();
-  cmd->add_option("--points-fraction", a->cfg.points.fraction, "Fraction of each tile's pixels selected")
+  cmd->add_option("--tile", a->cfg.events.points.tile, "Point selection tile size, px")
       ->capture_default_str();
-  cmd->add_option("--max-points", a->cfg.points.max_points, "Cap on points per keyframe (0: none)")
+  cmd->add_option("--points-fraction", a->cfg.events.points.fraction,
+                  "Fraction of each tile's pixels selected")
       ->capture_default_str();
-  cmd->add_option("--min-gradient", a->cfg.points.min_gradient, "Minimum log-gradient of a point")
+  cmd->add_option("--max-points", a->cfg.events.points.max_points, "Cap on points per keyframe (0: none)")
+      ->capture_default_str();
+  cmd->add_option("--min-gradient", a->cfg.events.points.min_gradient, "Minimum log-gradient of a point")
       ->capture_default_str();
   cmd->add_option("--depth-noise", a->cfg.depth_noise, "Depth noise sigma, fraction of the median depth")
       ->capture_default_str();
-  cmd->add_option("--depth-median", a->cfg.depth_median_px,
+  cmd->add_option("--depth-median", a->cfg.events.depth_median_px,
                   "Median-filter keyframe inverse depths over this radius, px (0: off)")
       ->capture_default_str();
   cmd->add_option("--seed", a->cfg.seed, "Seed of the depth noise")->capture_default_str();
@@ -124,12 +126,12 @@ void addTrackCommand(CLI::App& app) {
       "!--no-frame-refine", a->cfg.refine_keyframes,
       "Keyframe poses from events only (default: refined by aligning the frame to the previous keyframe)");
   cmd->add_option(
-         "--min-correlation-ratio", a->cfg.min_correlation_ratio,
+         "--min-correlation-ratio", a->cfg.events.lost_track.min_correlation_ratio,
          "Lost track when an event frame's correlation falls below this fraction of its recent median "
          "(0: off)")
       ->capture_default_str();
   cmd->add_option(
-         "--max-cost-ratio", a->cfg.max_cost_ratio,
+         "--max-cost-ratio", a->cfg.events.lost_track.max_cost_ratio,
          "Lost track when an event frame's cost rises above this multiple of its recent median (0: off)")
       ->capture_default_str();
   cmd->add_flag("!--no-reversal-compensation", a->cfg.event_frame.reversal_compensation,

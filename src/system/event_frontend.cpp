@@ -11,6 +11,49 @@
 
 namespace eds {
 
+namespace {
+
+// The reference's points at (u, v) with inverse depths `depth` (median-filtered over radius_px when
+// > 0), their gradients from the keyframe's image.
+void addPoints(Keyframe& kf, std::vector<cv::Point2f>& uv, std::vector<double>& depth, double radius_px) {
+  if (radius_px > 0) medianFilterInverseDepth(uv, depth, radius_px);
+  kf.points.reserve(kf.points.size() + uv.size());
+  for (std::size_t i = 0; i < uv.size(); ++i) {
+    KeyframePoint kp;
+    kp.u = uv[i].x, kp.v = uv[i].y;
+    kp.gx = sampleBilinear(kf.grad_x, kp.u, kp.v);
+    kp.gy = sampleBilinear(kf.grad_y, kp.u, kp.v);
+    kp.inv_depth = depth[i];
+    kf.points.push_back(kp);
+  }
+}
+
+// The reference's image (and its gradients) at pose T_w_kf, without points.
+Keyframe imageOf(const Keyframe& ref, const SE3& T_w_kf) {
+  Keyframe kf;
+  kf.id = ref.id;
+  kf.t = ref.t;
+  kf.T_w_kf = T_w_kf;
+  setKeyframeImage(kf, ref.image);
+  return kf;
+}
+
+template <std::size_t N>
+double medianOf(std::array<double, N> v, std::size_t n) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n / 2),
+                   v.begin() + static_cast<std::ptrdiff_t>(n));
+  return v[n / 2];
+}
+
+}  // namespace
+
+void LostTrackConfig::validate() const {
+  if (!(min_correlation_ratio >= 0 && min_correlation_ratio < 1))
+    throw std::invalid_argument("events.lost_track.min_correlation_ratio must be in [0, 1) (0: no check)");
+  if (!(max_cost_ratio == 0 || max_cost_ratio > 1))
+    throw std::invalid_argument("events.lost_track.max_cost_ratio must be 0 (no check) or > 1");
+}
+
 void MotionPriorConfig::validate() const {
   if (!(sigma_translation > 0) || !(sigma_rotation > 0) || !(accel >= 0) || !(ang_accel >= 0) ||
       !(max_gap_s > 0))
@@ -23,14 +66,11 @@ EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg
     : cam_(pinhole), cfg_(cfg), tracker_(pinhole, cfg.tracker) {
   cfg_.points.validate();
   cfg_.motion_prior.validate();
+  cfg_.lost_track.validate();
 }
 
 void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
-  Keyframe kf;
-  kf.id = ref.id;
-  kf.t = ref.t;
-  kf.T_w_kf = T_w_kf;
-  setKeyframeImage(kf, ref.image);
+  Keyframe kf = imageOf(ref, T_w_kf);
   // The back-end's points (their depth is optimized), and the keyframe's selected pixels that lie
   // next to one of them (fill radius): farther, a depth taken across an occlusion edge would bias
   // the tracker.
@@ -49,15 +89,21 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
   for (std::size_t i = 0; i < px.size(); ++i)
     if (rho[i] > 0)
       uv.emplace_back(static_cast<float>(px[i].x), static_cast<float>(px[i].y)), depth.push_back(rho[i]);
-  if (cfg_.depth_median_px > 0) medianFilterInverseDepth(uv, depth, cfg_.depth_median_px);
-  for (std::size_t i = 0; i < uv.size(); ++i) {
-    KeyframePoint kp;
-    kp.u = uv[i].x, kp.v = uv[i].y;
-    kp.gx = sampleBilinear(kf.grad_x, kp.u, kp.v);
-    kp.gy = sampleBilinear(kf.grad_y, kp.u, kp.v);
-    kp.inv_depth = depth[i];
-    kf.points.push_back(kp);
-  }
+  addPoints(kf, uv, depth, cfg_.depth_median_px);
+  adopt(std::move(kf), T_w_kf);
+}
+
+void EventFrontend::setDenseReference(const Keyframe& ref, const SE3& T_w_kf) {
+  Keyframe kf = imageOf(ref, T_w_kf);
+  std::vector<cv::Point2f> uv;
+  std::vector<double> depth;
+  for (const KeyframePoint& p : ref.points)
+    if (p.inv_depth > 0) uv.emplace_back(p.u, p.v), depth.push_back(p.inv_depth);
+  addPoints(kf, uv, depth, cfg_.depth_median_px);
+  adopt(std::move(kf), T_w_kf);
+}
+
+void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf) {
   if (kf.points.size() < 50) return;  // keep the previous reference: this one cannot be tracked against
   std::vector<double> z;
   z.reserve(kf.points.size());
@@ -75,10 +121,12 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
     T_ef_kf_ = SE3();
   }
   T_w_kf_ = T_w_kf;
-  ref_id_ = ref.id;
-  tracker_.setKeyframe(kf);
+  ref_id_ = kf.id;
+  ref_ = std::move(kf);
+  tracker_.setKeyframe(ref_);
   t_prev_ = -1;
   has_ref_ = true;
+  recent_n_ = 0;
 }
 
 std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, std::string* failure) {
@@ -136,12 +184,42 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
     if (failure) *failure = tr.failure;
     return std::nullopt;
   }
+  // A lost track's pose is not given out, but the estimate follows it: frozen at the last good pose
+  // it would fall behind the camera until a frame or a new reference corrects it.
+  const std::string lost = lostTrack(tr);
+  if (lost.empty()) {
+    recent_corr_[recent_n_ % kRecent] = tr.correlation;
+    recent_cost_[recent_n_ % kRecent] = tr.cost;
+    ++recent_n_;
+  }
+  last_in_view_ = tr.points_in_view;
   T_prev_ = T_ef_kf_;
   t_prev_ = t_last_;
   T_ef_kf_ = T;
   nu_ = nu;
   t_last_ = ef.t;
+  if (!lost.empty()) {
+    if (failure) *failure = lost;
+    return std::nullopt;
+  }
   return T_w_kf_ * T_ef_kf_.inverse();
+}
+
+// The tracker's own failure, or correlation far below / cost far above their recent level on this
+// reference (from the third event frame on it).
+std::string EventFrontend::lostTrack(const TrackResult& tr) const {
+  if (recent_n_ < 3) return {};
+  const std::size_t n = std::min(recent_n_, kRecent);
+  const LostTrackConfig& lc = cfg_.lost_track;
+  const double corr_ref = medianOf(recent_corr_, n), cost_ref = medianOf(recent_cost_, n);
+  char why[160] = "";
+  if (lc.min_correlation_ratio > 0 && tr.correlation < lc.min_correlation_ratio * corr_ref)
+    std::snprintf(why, sizeof why, "correlation %.3f fell below %.2f of its recent median %.3f",
+                  tr.correlation, lc.min_correlation_ratio, corr_ref);
+  else if (lc.max_cost_ratio > 0 && tr.cost > lc.max_cost_ratio * cost_ref)
+    std::snprintf(why, sizeof why, "cost %.4g rose above %.2f times its recent median %.4g", tr.cost,
+                  lc.max_cost_ratio, cost_ref);
+  return why;
 }
 
 void EventFrontend::correct(TimeNs t, const SE3& T_w_c) {

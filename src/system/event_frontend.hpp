@@ -4,7 +4,9 @@
 // back-end's (its window points projected into the newest keyframe); the keyframe's other selected
 // pixels take the inverse depth of the nearest of those points (k-d tree), so the tracker sees the
 // paper's 10-15 % of pixels. Frames, when they come, correct the estimate (they are sharper).
+#include <array>
 #include <optional>
+#include <string>
 
 #include "core/reflect.hpp"
 #include "frontend/event_frame.hpp"
@@ -33,28 +35,47 @@ struct MotionPriorConfig {
 
 EDS_FIELDS(MotionPriorConfig, enabled, sigma_translation, accel, sigma_rotation, ang_accel, max_gap_s)
 
+// The lost-track check: an event frame whose correlation n̂·n falls below min_correlation_ratio of
+// the median of the last five event frames tracked on the same reference, or whose cost rises above
+// max_cost_ratio times theirs, is a failure (its pose is not kept). A fixed floor cannot tell: a good
+// run on the simulated desk has a sixth of its event frames below 0.85. 0 turns a check off.
+struct LostTrackConfig {
+  double min_correlation_ratio = 0.75;
+  double max_cost_ratio = 2.0;
+  void validate() const;
+};
+
+EDS_FIELDS(LostTrackConfig, min_correlation_ratio, max_cost_ratio)
+
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
-  PointSelectionConfig points;  // selection on the keyframe's log gradient (as in tracking-only mode)
+  PointSelectionConfig points;  // selection on the keyframe's log gradient
   DepthFillConfig fill{.max_distance_px = 1, .neighbours = 3};
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
   MotionPriorConfig motion_prior;
+  LostTrackConfig lost_track;
 };
 
-EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, motion_prior)
+EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, motion_prior, lost_track)
 
 class EventFrontend {
  public:
   EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg);
 
-  // A new reference: keyframe intensity image and points with inverse depths, and its pose.
+  // A new reference: keyframe intensity image and points with inverse depths, and its pose. The
+  // points are the back-end's: the keyframe's selected pixels next to one of them take its depth.
   void setReference(const Keyframe& ref, const SE3& T_w_kf);
+  // A reference whose points are already the selected pixels, each with its depth (known depth).
+  void setDenseReference(const Keyframe& ref, const SE3& T_w_kf);
   bool hasReference() const { return has_ref_; }
+  // The reference as tracked: its image, and its points with their (filtered) inverse depths.
+  const Keyframe& reference() const { return ref_; }
   // The reference keyframe's id and the pose the event poses are composed with (T_w_ef = T_w_kf·T_kf_ef).
   int referenceId() const { return ref_id_; }
   const SE3& T_w_kf() const { return T_w_kf_; }
   // Tracks an event frame from the prior (if given) or a constant-velocity prediction. The pose
-  // (T_w_ef), or nullopt when the frame cannot be tracked (the estimate then stays as it was).
+  // (T_w_ef), or nullopt when the frame cannot be tracked (the estimate then stays as it was) or the
+  // lost-track check fails (the estimate follows the solve; `failure` says why).
   std::optional<SE3> track(const EventFrame& ef, const SE3* prior, std::string* failure = nullptr);
   // An event frame between two frames already tracked (T_w_a at t_a, T_w_b at t_b; the buffered event
   // frames of the bootstrap): it starts from the frames' geodesic interpolation, which is also its
@@ -65,9 +86,23 @@ class EventFrontend {
   // A better pose at time t (a tracked frame): the next event frame starts from it, and the last two
   // make the motion prior.
   void correct(TimeNs t, const SE3& T_w_c);
+  // Starts again from T_w_c at rest (after a lost track: from the last good pose).
+  void restartFrom(const SE3& T_w_c) {
+    T_ef_kf_ = T_w_c.inverse() * T_w_kf_;
+    nu_.setZero();
+    t_prev_ = -1;
+  }
   int numPoints() const { return static_cast<int>(tracker_.numPoints()); }
   // The last solve's correlation n̂·n of the event frame with the model's prediction.
   double lastCorrelation() const { return last_correlation_; }
+  // Points of the reference inside the last tracked event frame, and the last pose relative to the
+  // reference (for a keyframe policy).
+  int lastPointsInView() const { return last_in_view_; }
+  int pointsInView(const SE3& T_ef_kf) const {
+    return tracker_.pointsInView(T_ef_kf, cam_.width, cam_.height);
+  }
+  const SE3& T_ef_kf() const { return T_ef_kf_; }
+  double referenceMedianDepth() const { return median_depth_; }
   // The model's prediction ΔL̂ of the last tracked event frame, at its pose (EventTracker::predictedImage).
   cv::Mat lastPrediction() const { return tracker_.predictedImage(T_ef_kf_, nu_, cam_.width, cam_.height); }
 
@@ -76,6 +111,7 @@ class EventFrontend {
   EventFrontendConfig cfg_;
   EventTracker tracker_;
   bool has_ref_ = false;
+  Keyframe ref_;
   int ref_id_ = -1;
   SE3 T_w_kf_;
   SE3 T_ef_kf_, T_prev_;  // current estimate and the one before (constant-velocity prediction)
@@ -84,9 +120,16 @@ class EventFrontend {
   bool corrected_ = false;
   double median_depth_ = 1.0;  // of the reference's points
   double last_correlation_ = 0;
+  int last_in_view_ = 0;
+  // Correlations and costs of the last event frames tracked on this reference (ring buffers).
+  static constexpr std::size_t kRecent = 5;
+  std::array<double, kRecent> recent_corr_{}, recent_cost_{};
+  std::size_t recent_n_ = 0;
   // The last two frames' poses (world), for the motion prior.
   TimeNs t_f0_ = -1, t_f1_ = -1;
   SE3 T_w_f0_, T_w_f1_;
+  void adopt(Keyframe kf, const SE3& T_w_kf);
+  std::string lostTrack(const TrackResult& tr) const;
   bool motionPrior(TimeNs t, PosePrior& prior) const;
   Vec6 priorSigma(double dt, double grow) const;
   std::optional<SE3> solve(const EventFrame& ef, const SE3& T_init, int levels, const PosePrior* motion,

@@ -184,10 +184,10 @@ class Core {
   }
 
   // During the bootstrap the events track against its reference (its current inverse depths; 1 at
-  // first): their pose at the next frame is the bootstrap's hint. A new reference (a restart) is a new
-  // world: the tracking starts again.
+  // first): their pose at the next frame is the bootstrap's hint (frames far apart: a constant-velocity
+  // guess is too far off). A new reference (a restart) is a new world: the tracking starts again.
   void syncBootstrapEvents(TimeNs t) {
-    if (!cfg_.use_events || !cfg_.bootstrap_from_events || !boot_.hasReference()) return;
+    if (!cfg_.use_events || !boot_.hasReference()) return;
     const Keyframe& ref = boot_.reference();
     if (!boot_events_ || ref.t != boot_ref_t_ || boot_.restarts() != boot_restarts_) {
       boot_events_.emplace(und_.pinhole(), cfg_.events);

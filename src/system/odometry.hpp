@@ -94,9 +94,6 @@ struct OdometryConfig {
   // poses; results farther than half the motion between the bracketing frames plus these margins are
   // rejected (translation in map units: the bootstrap's mean inverse depth is 1).
   double buffered_gate_translation = 0.002, buffered_gate_rotation_deg = 0.2;
-  // During the bootstrap, events track against its reference and seed each frame's alignment (frames
-  // far apart: the constant-velocity guess is too far off).
-  bool bootstrap_from_events = true;
   // The refined event-rate positions (trajectory_events.txt): a local quadratic fit over ±this many
   // seconds (system/trajectory_smoothing.hpp; 0: as composed). The live poses are never smoothed.
   double event_smoothing_s = 0.06;
@@ -108,7 +105,7 @@ struct OdometryConfig {
 EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events,
            flicker_filter, event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg,
-           bootstrap_from_events, event_smoothing_s, frame_rate, start_s, duration_s)
+           event_smoothing_s, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;

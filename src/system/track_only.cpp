@@ -11,8 +11,8 @@
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
 #include "frontend/event_packets.hpp"
+#include "frontend/point_selection.hpp"
 #include "io/output_file.hpp"
-#include "mapping/depth_fill.hpp"
 #include "system/run_stats.hpp"
 
 namespace eds {
@@ -40,20 +40,22 @@ struct KeyframeBuilder {
     return f;
   }
 
+  // The frame's selected pixels with the depth map's depth there (plus noise); the event front-end
+  // median-filters the inverse depths.
   Keyframe make(int id, std::size_t frame, const SE3& T_w_kf, const cv::Mat& img) {
     Keyframe kf;
     kf.id = id;
     kf.t = seq.frames()[frame].t;
     kf.T_w_kf = T_w_kf;
-    setKeyframeImage(kf, img, cfg.keyframe_image);
-    const std::vector<cv::Point> pts = selectPoints(kf.grad_x, kf.grad_y, cfg.points);
+    setKeyframeImage(kf, img);
+    const std::vector<cv::Point> pts = selectPoints(kf.grad_x, kf.grad_y, cfg.events.points);
+    const std::string depth_file = (seq.dir() / "depth" / seq.frames()[frame].path.filename()).string();
     if (pts.empty())
       throw std::runtime_error("no points selected in frame " + seq.frames()[frame].path.string() +
                                " (flat image? lower --min-gradient)");
     const auto depth = seq.loadDepth(frame);
     if (!depth)
-      throw InputError((seq.dir() / "depth" / seq.frames()[frame].path.filename()).string(),
-                       "depth map not found: --depth-from-gt needs the sequence's depth/ maps");
+      throw InputError(depth_file, "depth map not found: --depth-from-gt needs the sequence's depth/ maps");
     std::vector<double> zs;
     for (const cv::Point& p : pts) {
       // Depth maps are on the raw (distorted) grid; z is the same in the undistorted camera.
@@ -61,60 +63,32 @@ struct KeyframeBuilder {
       const int yr = static_cast<int>(std::lround(und.mapY().at<float>(p.y, p.x)));
       double z = 0;
       if (xr >= 0 && yr >= 0 && xr < depth->cols && yr < depth->rows) z = depth->at<float>(yr, xr);
+      if (!(z > 0)) continue;
       KeyframePoint kp;
       kp.u = static_cast<float>(p.x);
       kp.v = static_cast<float>(p.y);
-      kp.gx = kf.grad_x.at<float>(p.y, p.x);
-      kp.gy = kf.grad_y.at<float>(p.y, p.x);
-      kp.inv_depth = z > 0 ? 1.0 / z : 0.0;
-      if (z > 0) zs.push_back(z);
+      kp.inv_depth = 1.0 / z;
+      zs.push_back(z);
       kf.points.push_back(kp);
     }
-    if (zs.empty())
-      throw InputError((seq.dir() / "depth" / seq.frames()[frame].path.filename()).string(),
-                       "no selected point has a depth");
+    if (zs.empty()) throw InputError(depth_file, "no selected point has a depth");
     std::nth_element(zs.begin(), zs.begin() + zs.size() / 2, zs.end());
     const double median = zs[zs.size() / 2];
     if (cfg.depth_noise > 0) {
       std::normal_distribution<double> noise(0.0, cfg.depth_noise * median);
       for (KeyframePoint& kp : kf.points)
-        if (kp.inv_depth > 0) kp.inv_depth = 1.0 / std::max(0.05 * median, 1.0 / kp.inv_depth + noise(rng));
-    }
-    if (cfg.depth_median_px > 0) {
-      std::vector<cv::Point2f> px;
-      std::vector<double> rho;
-      for (const KeyframePoint& kp : kf.points) px.emplace_back(kp.u, kp.v), rho.push_back(kp.inv_depth);
-      medianFilterInverseDepth(px, rho, cfg.depth_median_px);
-      for (std::size_t i = 0; i < rho.size(); ++i) kf.points[i].inv_depth = rho[i];
+        kp.inv_depth = 1.0 / std::max(0.05 * median, 1.0 / kp.inv_depth + noise(rng));
     }
     return kf;
   }
 };
 
-double medianDepth(const Keyframe& kf) {
-  std::vector<double> z;
-  for (const auto& p : kf.points)
-    if (p.inv_depth > 0) z.push_back(1.0 / p.inv_depth);
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  return z[z.size() / 2];
-}
-
-// Median of the last five values (fewer when there are fewer).
-double recentMedian(const std::vector<double>& v) {
-  constexpr std::size_t kRecent = 5;
-  std::array<double, kRecent> last{};
-  const std::size_t n = std::min(v.size(), kRecent);
-  std::copy(v.end() - static_cast<std::ptrdiff_t>(n), v.end(), last.begin());
-  std::nth_element(last.begin(), last.begin() + n / 2, last.begin() + n);
-  return last[n / 2];
-}
-
 }  // namespace
 
 namespace {
 
-// The tracking-only loop: event frames tracked against the current keyframe, a new keyframe from the
-// newest frame when the policy (or a lost track) asks.
+// The tracking-only loop: the event front-end tracks event frames against the current keyframe; a
+// new keyframe comes from the newest frame when the policy (or a lost track) asks.
 class TrackOnlyRun {
  public:
   TrackOnlyRun(const Sequence& seq, const TrackOnlyConfig& cfg, const Undistorter& und, TrackOnlyResult& res)
@@ -122,14 +96,13 @@ class TrackOnlyRun {
         cfg_(cfg),
         cam_(und.pinhole()),
         res_(res),
-        tracker_(cam_, cfg.tracker),
+        front_(cam_, cfg.events),
         builder_{seq, und, cfg, std::mt19937_64(cfg.seed)},
         frame_tracker_(cam_, cfg.frame_tracker) {
     const Trajectory gt = seq.groundTruth();
     if (gt.empty()) throw InputError((seq.dir() / "groundtruth.txt").string(), "empty ground truth");
-    kf_ = builder_.make(0, 0, poseAt(gt, seq.frames()[0].t), builder_.image(0));
-    adoptKeyframe();
-    res_.trajectory.push_back({kf_.t, kf_.T_w_kf});
+    adopt(builder_.make(0, 0, poseAt(gt, seq.frames()[0].t), builder_.image(0)));
+    res_.trajectory.push_back({front_.reference().t, front_.T_w_kf()});
   }
 
   // One event frame: a keyframe hand-over first if one is due, then the tracking.
@@ -139,13 +112,22 @@ class TrackOnlyRun {
   }
 
  private:
-  void adoptKeyframe() {
-    tracker_.setKeyframe(kf_);
-    if (cfg_.refine_keyframes) frame_tracker_.setKeyframe(kf_);
-    kf_median_depth_ = medianDepth(kf_);
-    kf_in_view_ = tracker_.pointsInView(SE3(), cam_.width, cam_.height);
+  // Makes kf the reference; a keyframe with too few points with a depth is not taken (the first one
+  // must be).
+  void adopt(Keyframe kf) {
+    front_.setDenseReference(kf, kf.T_w_kf);
+    if (front_.referenceId() != kf.id) {
+      const std::string why =
+          "keyframe at " + std::to_string(toSeconds(kf.t)) + " s: too few points with a depth";
+      if (!front_.hasReference()) throw std::runtime_error(why);
+      res_.failures.push_back({kf.t, why + "; tracking goes on against the previous keyframe"});
+      return;
+    }
+    // With the front-end's filtered depths: the frame alignment uses them too.
+    if (cfg_.refine_keyframes) frame_tracker_.setKeyframe(front_.reference());
+    kf_in_view_ = front_.pointsInView(SE3());
     ++res_.keyframes;
-    res_.points_per_keyframe.push_back(static_cast<int>(tracker_.numPoints()));
+    res_.points_per_keyframe.push_back(front_.numPoints());
   }
 
   // The newest frame not after t (and newer than the keyframe's) becomes the keyframe, at the event
@@ -160,88 +142,51 @@ class TrackOnlyRun {
     SE3 T_w_kf_new = poseAt(res_.trajectory, frames[f].t);
     const cv::Mat img = builder_.image(f);
     if (cfg_.refine_keyframes) {
-      SE3 T_f_kf = T_w_kf_new.inverse() * kf_.T_w_kf;
+      SE3 T_f_kf = T_w_kf_new.inverse() * front_.T_w_kf();
       double alpha = 1.0, beta = 0.0;
       const auto t0 = Clock::now();
       const FrameTrackResult fr = frame_tracker_.track(img, T_f_kf, alpha, beta);
       res_.frame_track_ms.push_back(msSince(t0));
       if (fr.ok)
-        T_w_kf_new = kf_.T_w_kf * T_f_kf.inverse();
+        T_w_kf_new = front_.T_w_kf() * T_f_kf.inverse();
       else
         res_.failures.push_back({frames[f].t, "frame alignment failed (rmse " + std::to_string(fr.rmse) +
                                                   "); keyframe keeps the event pose"});
     }
-    const SE3 T_w_ef = kf_.T_w_kf * T_ef_kf_.inverse();
-    const SE3 T_kfnew_kfold = T_w_kf_new.inverse() * kf_.T_w_kf;
-    kf_ = builder_.make(static_cast<int>(res_.keyframes), f, T_w_kf_new, img);
-    kf_frame_ = f;
-    adoptKeyframe();
-    T_ef_kf_ = T_w_ef.inverse() * T_w_kf_new;
-    // ν is a twist in the keyframe's frame: rotate it into the new one.
-    const Mat3 R = T_kfnew_kfold.rotationMatrix();
-    nu_.head<3>() = R * nu_.head<3>();
-    nu_.tail<3>() = R * nu_.tail<3>();
-    if (lost_) nu_.setZero();
-    t_prev_ = t_last_ = -1;
+    adopt(builder_.make(static_cast<int>(res_.keyframes), f, T_w_kf_new, img));
+    kf_frame_ = f;  // also when not taken: the next hand-over waits for a newer frame
+    if (lost_) front_.restartFrom(res_.trajectory.back().T_w_c);
     need_keyframe_ = lost_ = false;
-    recent_corr_.clear();
-    recent_cost_.clear();
   }
 
-  // Lost-track check: correlation far below, or cost far above, their recent level on this keyframe.
-  std::string lostTrack(const TrackResult& tr) const {
-    if (!tr.ok || recent_corr_.size() < 3) return tr.failure;
-    const double corr_ref = recentMedian(recent_corr_), cost_ref = recentMedian(recent_cost_);
-    if (cfg_.min_correlation_ratio > 0 && tr.correlation < cfg_.min_correlation_ratio * corr_ref)
-      return "correlation " + std::to_string(tr.correlation) + " fell below " +
-             std::to_string(cfg_.min_correlation_ratio) + " of its recent median " + std::to_string(corr_ref);
-    if (cfg_.max_cost_ratio > 0 && tr.cost > cfg_.max_cost_ratio * cost_ref)
-      return "cost " + std::to_string(tr.cost) + " rose above " + std::to_string(cfg_.max_cost_ratio) +
-             " times its recent median " + std::to_string(cost_ref);
-    return tr.failure;
-  }
-
-  void writeDebugImage(const EventFrame& ef, const SE3& T_ef_kf, const Vec6& nu) const {
+  void writeDebugImage(const EventFrame& ef) const {
     cv::Mat both;
-    cv::hconcat(toGray8(ef.delta), toGray8(tracker_.predictedImage(T_ef_kf, nu, cam_.width, cam_.height)),
-                both);
+    cv::hconcat(toGray8(ef.delta), toGray8(front_.lastPrediction()), both);
     char name[64];
     std::snprintf(name, sizeof name, "ef_%06zu.png", res_.event_frames - 1);
     cv::imwrite((cfg_.debug_dir / name).string(), both);
   }
 
   void track(const EventFrame& ef) {
-    // Constant-velocity prediction from the last two event frames on this keyframe.
-    SE3 T_est = T_ef_kf_;
-    if (t_prev_ >= 0 && t_last_ > t_prev_) {
-      const double alpha = static_cast<double>(ef.t - t_last_) / static_cast<double>(t_last_ - t_prev_);
-      const SE3 T_step = T_ef_kf_ * T_prev_.inverse();  // previous -> last event frame
-      T_est = SE3::exp(std::clamp(alpha, 0.0, 3.0) * T_step.log()) * T_ef_kf_;
-    }
     const auto tt = Clock::now();
-    Vec6 nu_est = nu_;
-    // Coarse-to-fine only when the prediction is weak (first frames on a keyframe, after a failure).
-    const TrackResult tr = tracker_.track(ef, T_est, nu_est, t_prev_ >= 0 ? 1 : 0);
+    std::string failure;
+    const std::optional<SE3> T_w_ef = front_.track(ef, nullptr, &failure);
     res_.track_ms.push_back(msSince(tt));
-    if (!cfg_.debug_dir.empty()) writeDebugImage(ef, T_est, nu_est);
-    const std::string failure = lostTrack(tr);
-    if (!failure.empty()) {
+    if (!cfg_.debug_dir.empty()) writeDebugImage(ef);
+    if (!T_w_ef) {
       res_.failures.push_back({ef.t, failure});
       need_keyframe_ = lost_ = true;  // go on from the next keyframe
       return;
     }
     ++res_.tracked;
-    recent_corr_.push_back(tr.correlation);
-    recent_cost_.push_back(tr.cost);
-    T_prev_ = T_ef_kf_;
-    t_prev_ = t_last_;
-    T_ef_kf_ = T_est;
-    nu_ = nu_est;
-    t_last_ = ef.t;
-    res_.trajectory.push_back({ef.t, kf_.T_w_kf * T_ef_kf_.inverse()});
-    const bool drop = tr.points_in_view < (1.0 - cfg_.policy.max_point_drop) * kf_in_view_;
-    const bool rotated = T_ef_kf_.so3().angle() > cfg_.policy.max_rotation_deg * M_PI / 180.0;
-    const bool moved = T_ef_kf_.translation().norm() > cfg_.policy.max_translation_ratio * kf_median_depth_;
+    res_.trajectory.push_back({ef.t, *T_w_ef});
+    res_.correlations.push_back(front_.lastCorrelation());
+    const SE3& T_ef_kf = front_.T_ef_kf();
+    const KeyframePolicyConfig& pc = cfg_.policy;
+    const bool drop = front_.lastPointsInView() < (1.0 - pc.max_point_drop) * kf_in_view_;
+    const bool rotated = T_ef_kf.so3().angle() > pc.max_rotation_deg * M_PI / 180.0;
+    const bool moved =
+        T_ef_kf.translation().norm() > pc.max_translation_ratio * front_.referenceMedianDepth();
     need_keyframe_ = drop || rotated || moved;
   }
 
@@ -249,19 +194,12 @@ class TrackOnlyRun {
   const TrackOnlyConfig& cfg_;
   const CameraModel& cam_;
   TrackOnlyResult& res_;
-  EventTracker tracker_;
+  EventFrontend front_;
   KeyframeBuilder builder_;
   FrameTracker frame_tracker_;
-  Keyframe kf_;
   std::size_t kf_frame_ = 0;
-  double kf_median_depth_ = 1;
   int kf_in_view_ = 0;
-  SE3 T_ef_kf_, T_prev_;  // current estimate and the one before it on this keyframe
-  Vec6 nu_ = Vec6::Zero();
-  TimeNs t_prev_ = -1, t_last_ = -1;
   bool need_keyframe_ = false, lost_ = false;
-  // Correlations and costs of the event frames tracked on this keyframe (the lost-track check's reference).
-  std::vector<double> recent_corr_, recent_cost_;
 };
 
 }  // namespace
@@ -269,11 +207,8 @@ class TrackOnlyRun {
 TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   const auto wall0 = Clock::now();
   cfg.event_frame.validate();
-  cfg.points.validate();
-  if (!(cfg.min_correlation_ratio >= 0 && cfg.min_correlation_ratio < 1))
-    throw std::invalid_argument("min_correlation_ratio must be in [0, 1) (0: no lost-track check)");
-  if (!(cfg.max_cost_ratio == 0 || cfg.max_cost_ratio > 1))
-    throw std::invalid_argument("max_cost_ratio must be 0 (off) or > 1");
+  cfg.events.points.validate();
+  cfg.events.lost_track.validate();
   if (!seq.hasFrames())
     throw InputError((seq.dir() / "images.txt").string(), "tracking needs frames for keyframes");
   const Undistorter und(seq.camera());
@@ -335,9 +270,9 @@ void writeTrackSummary(const std::filesystem::path& file, const TrackOnlyResult&
   writeTrackSummary(file, r, "track --depth-from-gt",
                     {{"events_per_frame", cfg.event_frame.num_events},
                      {"overlap", cfg.event_frame.overlap},
-                     {"tile", cfg.points.tile},
-                     {"point_fraction", cfg.points.fraction},
-                     {"max_points", cfg.points.max_points},
+                     {"tile", cfg.events.points.tile},
+                     {"point_fraction", cfg.events.points.fraction},
+                     {"max_points", cfg.events.points.max_points},
                      {"depth_noise", cfg.depth_noise},
                      {"seed", static_cast<double>(cfg.seed)}});
 }

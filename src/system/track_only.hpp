@@ -1,19 +1,18 @@
 #pragma once
 // Tracking-only mode (for studies and tests): keyframes come from the sequence's frames with the TRUE
-// depth of their depth maps (optionally perturbed), and the event tracker tracks every event frame
-// against the current keyframe. The first keyframe takes its ground-truth pose; every later one takes
-// the pose estimated at its frame's time (event pose, refined by aligning the frame to the previous
-// keyframe), so errors accumulate as in the full system.
+// depth of their depth maps (optionally perturbed), and the event front-end of `eds run` tracks every
+// event frame against the current keyframe. The first keyframe takes its ground-truth pose; every
+// later one takes the pose estimated at its frame's time (event pose, refined by aligning the frame
+// to the previous keyframe), so errors accumulate as in the full system.
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "frontend/event_frame.hpp"
-#include "frontend/event_tracker.hpp"
 #include "frontend/frame_tracker.hpp"
-#include "frontend/point_selection.hpp"
 #include "io/sequence.hpp"
+#include "system/event_frontend.hpp"
 
 namespace eds {
 
@@ -25,26 +24,17 @@ struct KeyframePolicyConfig {
 
 struct TrackOnlyConfig {
   EventFrameConfig event_frame;
-  EventTrackerConfig tracker;
-  PointSelectionConfig points;
-  KeyframeImageConfig keyframe_image;
+  // The event front-end: tracker, point selection, the median filter of the keyframe's inverse depths
+  // (noisy depth attenuates the tracker's translation: with 10 % noise on the ESIM plane the ATE is
+  // 15 cm unfiltered, 0.9 cm at 10 px) and the lost-track check (a lost event frame's pose is not
+  // kept; the next keyframe's frame is aligned from the last good pose).
+  EventFrontendConfig events;
   KeyframePolicyConfig policy;
   FrameTrackerConfig frame_tracker;
   // A new keyframe's pose: the event pose at its frame's time, refined by aligning the frame to the
   // previous keyframe (on by default; off = event poses only).
   bool refine_keyframes = true;
-  // Lost-track check against the median of the last five event frames on the same keyframe: an event
-  // frame whose correlation n̂·n falls below min_correlation_ratio of it, or whose cost rises above
-  // max_cost_ratio times it, is a failure (its pose is not kept; the next keyframe's frame is aligned
-  // from the last good pose). A fixed floor cannot tell: a good run on the simulated desk has 93 of 536
-  // event frames below 0.85. 0 turns a check off.
-  double min_correlation_ratio = 0.75;
-  double max_cost_ratio = 2.0;
   double depth_noise = 0.0;  // sigma of additive depth noise, as a fraction of the median depth
-  // > 0: median-filter keyframe inverse depths over this radius (px). Noisy depth attenuates the
-  // tracker's translation (errors in the regressor); with 10% noise on the ESIM plane the ATE is 15 cm
-  // unfiltered, 0.9 cm at 10 px; with exact depth it changes nothing measurable.
-  double depth_median_px = 10.0;
   std::uint64_t seed = 1;
   double duration_s = 0.0;          // 0 = the whole sequence (from the first frame)
   std::filesystem::path debug_dir;  // non-empty: write event frame | prediction PNGs there

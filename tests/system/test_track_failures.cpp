@@ -78,8 +78,8 @@ TEST(TrackOnly, ASuddenDropIsALostTrack) {
   const auto dir = noisySequence("track_drop", 0.8);
   const Sequence seq(dir);
   TrackOnlyConfig off;
-  off.min_correlation_ratio = 0;
-  off.max_cost_ratio = 0;
+  off.events.lost_track.min_correlation_ratio = 0;
+  off.events.lost_track.max_cost_ratio = 0;
   const TrackOnlyResult r_off = runTrackOnly(seq, off);
   const TrackOnlyResult r_on = runTrackOnly(seq, TrackOnlyConfig{});
   std::printf("[ sudden drop ] failures: %zu with the check off, %zu on\n", r_off.failures.size(),
@@ -94,12 +94,12 @@ TEST(TrackOnly, ASuddenDropIsALostTrack) {
   EXPECT_GT(toSeconds(r_on.trajectory.back().t), 1.1) << "tracking did not go on after the failures";
   // Each check alone catches it.
   TrackOnlyConfig cost_only;
-  cost_only.min_correlation_ratio = 0;
+  cost_only.events.lost_track.min_correlation_ratio = 0;
   const TrackOnlyResult r_cost = runTrackOnly(seq, cost_only);
   ASSERT_FALSE(r_cost.failures.empty());
   EXPECT_EQ(r_cost.failures.front().reason.rfind("cost ", 0), 0u) << r_cost.failures.front().reason;
   TrackOnlyConfig corr_only;
-  corr_only.max_cost_ratio = 0;
+  corr_only.events.lost_track.max_cost_ratio = 0;
   const TrackOnlyResult r_corr = runTrackOnly(seq, corr_only);
   ASSERT_FALSE(r_corr.failures.empty());
   EXPECT_EQ(r_corr.failures.front().reason.rfind("correlation ", 0), 0u) << r_corr.failures.front().reason;

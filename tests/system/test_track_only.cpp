@@ -54,13 +54,13 @@ TEST(TrackOnly, BadConfigurationsAreClearErrors) {
   cfg.event_frame.overlap = 1.0;
   EXPECT_THROW(runTrackOnly(seq, cfg), std::invalid_argument);
   cfg = {};
-  cfg.min_correlation_ratio = 1.5;
+  cfg.events.lost_track.min_correlation_ratio = 1.5;
   EXPECT_THROW(runTrackOnly(seq, cfg), std::invalid_argument);
   cfg = {};
-  cfg.max_cost_ratio = 0.5;
+  cfg.events.lost_track.max_cost_ratio = 0.5;
   EXPECT_THROW(runTrackOnly(seq, cfg), std::invalid_argument);
   cfg = {};
-  cfg.points.min_gradient = 1e9;  // nothing can be selected
+  cfg.events.points.min_gradient = 1e9;  // nothing can be selected
   try {
     runTrackOnly(seq, cfg);
     FAIL() << "no error without points";
