@@ -71,4 +71,11 @@ void requireWritableDir(const fs::path& dir) {
   fs::remove(probe, ec);
 }
 
+std::filesystem::path numberedFile(const std::filesystem::path& dir, const std::string& prefix, std::size_t i,
+                                   int digits, const std::string& rest) {
+  std::string n = std::to_string(i);
+  if (static_cast<int>(n.size()) < digits) n.insert(0, static_cast<std::size_t>(digits) - n.size(), '0');
+  return dir / (prefix + n + rest);
+}
+
 }  // namespace eds

@@ -32,5 +32,8 @@ void writeImageFile(const std::filesystem::path& target, const cv::Mat& image);
 // Creates `dir` if needed and checks that a file can be written in it, so that a run fails before any
 // processing rather than after; InputError naming the folder otherwise.
 void requireWritableDir(const std::filesystem::path& dir);
+// dir / (prefix + i with `digits` digits + rest), e.g. ("kf_", 3, 6, ".png") -> dir/kf_000003.png.
+std::filesystem::path numberedFile(const std::filesystem::path& dir, const std::string& prefix, std::size_t i,
+                                   int digits, const std::string& rest);
 
 }  // namespace eds

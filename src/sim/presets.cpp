@@ -107,6 +107,12 @@ class SceneBuilder {
   // Texel size that makes one texel `px` pixels at distance `z` for the reference focal length.
   static double texelFor(double z, double px) { return px * z / kFocalRef; }
 
+  // A rectangle with a texture of `kind` (texel: its size in metres).
+  void texturedRect(const std::string& name, const Vec3& centre, const Vec3& u, const Vec3& v, double su,
+                    double sv, double texel, const std::string& kind, const Vec3& push) {
+    rect(name, centre, u, v, su, sv, texel, texture(kind, su, sv, texel, 0.5), push);
+  }
+
   // A rectangle given in the view frame; pushed along `push` (view frame) until clear of the cameras.
   void rect(const std::string& name, const Vec3& centre, const Vec3& u, const Vec3& v, double su, double sv,
             double texel, int tex, const Vec3& push) {
@@ -118,6 +124,12 @@ class SceneBuilder {
     p.size_u = su, p.size_v = sv, p.texel = texel, p.texture = tex;
     std::vector<Plane> group{p};
     addClear(group, frame_.dir(push.x(), push.y(), push.z()));
+  }
+
+  // A box with a texture of `kind` at about one texel per pixel from its distance.
+  void texturedBox(const Box& b, const std::string& kind) {
+    const double texel = texelFor(b.z, 1.0);
+    box(b, texel, texture(kind, std::max(b.w, b.d), std::max(b.h, b.d), texel, 0.5));
   }
 
   // A box standing on its bottom face: the faces some camera position can see (never the bottom),
@@ -197,18 +209,13 @@ Scene roomScene(SceneBuilder& sb) {
 
   // Walls: texels of ~1.5 px at their typical distance, each wall its own kind of texture.
   const double t_back = SceneBuilder::texelFor(z_back, 1.5), t_side = 0.02, t_floor = 0.025, t_behind = 0.025;
-  sb.rect("back_wall", {xm, ym, z_back}, {1, 0, 0}, {0, 1, 0}, W, H, t_back,
-          sb.texture("mix", W, H, t_back, 0.5), {0, 0, 1});
-  sb.rect("left_wall", {xl, ym, zm}, {0, 0, 1}, {0, 1, 0}, D, H, t_side,
-          sb.texture("bricks", D, H, t_side, 0.5), {-1, 0, 0});
-  sb.rect("right_wall", {xr, ym, zm}, {0, 0, -1}, {0, 1, 0}, D, H, t_side,
-          sb.texture("noise", D, H, t_side, 0.5), {1, 0, 0});
-  sb.rect("floor", {xm, floor_y, zm}, {1, 0, 0}, {0, 0, 1}, W, D, t_floor,
-          sb.texture("checker", W, D, t_floor, 0.5), {0, 1, 0});
-  sb.rect("ceiling", {xm, ceil_y, zm}, {1, 0, 0}, {0, 0, -1}, W, D, t_floor,
-          sb.texture("blobs", W, D, t_floor, 0.5), {0, -1, 0});
-  sb.rect("wall_behind", {xm, ym, z_behind}, {-1, 0, 0}, {0, 1, 0}, W, H, t_behind,
-          sb.texture("stripes", W, H, t_behind, 0.5), {0, 0, -1});
+  sb.texturedRect("back_wall", {xm, ym, z_back}, {1, 0, 0}, {0, 1, 0}, W, H, t_back, "mix", {0, 0, 1});
+  sb.texturedRect("left_wall", {xl, ym, zm}, {0, 0, 1}, {0, 1, 0}, D, H, t_side, "bricks", {-1, 0, 0});
+  sb.texturedRect("right_wall", {xr, ym, zm}, {0, 0, -1}, {0, 1, 0}, D, H, t_side, "noise", {1, 0, 0});
+  sb.texturedRect("floor", {xm, floor_y, zm}, {1, 0, 0}, {0, 0, 1}, W, D, t_floor, "checker", {0, 1, 0});
+  sb.texturedRect("ceiling", {xm, ceil_y, zm}, {1, 0, 0}, {0, 0, -1}, W, D, t_floor, "blobs", {0, -1, 0});
+  sb.texturedRect("wall_behind", {xm, ym, z_behind}, {-1, 0, 0}, {0, 1, 0}, W, H, t_behind, "stripes",
+                  {0, 0, -1});
 
   // Boxes on the floor at 1.8-4.2 m; the tall one straddles the optical axis (its top above the
   // camera) and the small one stands on box1, so boxes occlude each other and the walls.
@@ -231,8 +238,7 @@ Scene roomScene(SceneBuilder& sb) {
           0.3,    0.3,        0.3,        boxes[1].yaw + r.uniform(-15, 15) * deg};
   boxes.push_back(top);
   for (const Box& b : boxes) {
-    const double texel = SceneBuilder::texelFor(b.z, 1.0);
-    sb.box(b, texel, sb.texture(kinds[k++ % 6], std::max(b.w, b.d), std::max(b.h, b.d), texel, 0.5));
+    sb.texturedBox(b, kinds[k++ % 6]);
   }
   return sb.finish();
 }
@@ -247,16 +253,14 @@ Scene deskScene(SceneBuilder& sb) {
   // Far wall and floor large enough to fill the view behind the desk.
   const double wall_w = 9.0 + (hi.x() - lo.x()), wall_h = 5.0;
   const double t_wall = SceneBuilder::texelFor(z_wall, 1.5);
-  sb.rect("far_wall", {0.5 * (lo.x() + hi.x()), floor_y - 0.5 * wall_h, z_wall}, {1, 0, 0}, {0, 1, 0}, wall_w,
-          wall_h, t_wall, sb.texture("mix", wall_w, wall_h, t_wall, 0.5), {0, 0, 1});
+  sb.texturedRect("far_wall", {0.5 * (lo.x() + hi.x()), floor_y - 0.5 * wall_h, z_wall}, {1, 0, 0}, {0, 1, 0},
+                  wall_w, wall_h, t_wall, "mix", {0, 0, 1});
   const double floor_z0 = lo.z() - 1.0;
-  sb.rect("floor", {0.5 * (lo.x() + hi.x()), floor_y, 0.5 * (floor_z0 + z_wall)}, {1, 0, 0}, {0, 0, 1},
-          wall_w, z_wall - floor_z0, 0.02, sb.texture("checker", wall_w, z_wall - floor_z0, 0.02, 0.5),
-          {0, 1, 0});
+  sb.texturedRect("floor", {0.5 * (lo.x() + hi.x()), floor_y, 0.5 * (floor_z0 + z_wall)}, {1, 0, 0},
+                  {0, 0, 1}, wall_w, z_wall - floor_z0, 0.02, "checker", {0, 1, 0});
   const double t_desk = SceneBuilder::texelFor(1.0, 1.0);  // seen from ~1 m on
-  sb.rect("desk", {0.5 * (desk_x0 + desk_x1), desk_y, 0.5 * (desk_z0 + desk_z1)}, {1, 0, 0}, {0, 0, 1},
-          desk_x1 - desk_x0, desk_z1 - desk_z0, t_desk,
-          sb.texture("noise", desk_x1 - desk_x0, desk_z1 - desk_z0, t_desk, 0.5), {0, 1, 0});
+  sb.texturedRect("desk", {0.5 * (desk_x0 + desk_x1), desk_y, 0.5 * (desk_z0 + desk_z1)}, {1, 0, 0},
+                  {0, 0, 1}, desk_x1 - desk_x0, desk_z1 - desk_z0, t_desk, "noise", {0, 1, 0});
 
   // Objects at 0.5-0.9 m on the desk; the "monitor" covers the optical axis and rises above it.
   const double deg = std::numbers::pi / 180.0;
@@ -275,8 +279,7 @@ Scene deskScene(SceneBuilder& sb) {
     b.w *= r.uniform(0.85, 1.15), b.d *= r.uniform(0.85, 1.15);
     if (!monitor) b.h *= r.uniform(0.85, 1.15);
     b.yaw = r.uniform(-1, 1) * (monitor ? 10 : 25) * deg;
-    const double texel = SceneBuilder::texelFor(b.z, 1.0);
-    sb.box(b, texel, sb.texture(kinds[k++ % 5], std::max(b.w, b.d), std::max(b.h, b.d), texel, 0.5));
+    sb.texturedBox(b, kinds[k++ % 5]);
   }
   return sb.finish();
 }
@@ -293,14 +296,11 @@ Scene buildingScene(SceneBuilder& sb) {
   const double xm = 0.5 * (xl + xr), ym = 0.5 * (ground_y + top_y), zm = 0.5 * (z_far + z_near);
   const double W = xr - xl, D = z_far - z_near;
   const double t_far = SceneBuilder::texelFor(z_far, 1.5), t_side = SceneBuilder::texelFor(7.0, 1.5);
-  sb.rect("far_facade", {xm, ym, z_far}, {1, 0, 0}, {0, 1, 0}, W, height, t_far,
-          sb.texture("bricks", W, height, t_far, 0.5), {0, 0, 1});
-  sb.rect("left_facade", {xl, ym, zm}, {0, 0, 1}, {0, 1, 0}, D, height, t_side,
-          sb.texture("mix", D, height, t_side, 0.5), {-1, 0, 0});
-  sb.rect("right_facade", {xr, ym, zm}, {0, 0, -1}, {0, 1, 0}, D, height, t_side,
-          sb.texture("stripes", D, height, t_side, 0.5), {1, 0, 0});
-  sb.rect("ground", {xm, ground_y, zm}, {1, 0, 0}, {0, 0, 1}, W, D, 0.04,
-          sb.texture("noise", W, D, 0.04, 0.5), {0, 1, 0});
+  sb.texturedRect("far_facade", {xm, ym, z_far}, {1, 0, 0}, {0, 1, 0}, W, height, t_far, "bricks", {0, 0, 1});
+  sb.texturedRect("left_facade", {xl, ym, zm}, {0, 0, 1}, {0, 1, 0}, D, height, t_side, "mix", {-1, 0, 0});
+  sb.texturedRect("right_facade", {xr, ym, zm}, {0, 0, -1}, {0, 1, 0}, D, height, t_side, "stripes",
+                  {1, 0, 0});
+  sb.texturedRect("ground", {xm, ground_y, zm}, {1, 0, 0}, {0, 0, 1}, W, D, 0.04, "noise", {0, 1, 0});
   const double deg = std::numbers::pi / 180.0;
   std::vector<Box> boxes = {{"pillar0", -2.2, 4.5, ground_y, 0.5, 4.0, 0.5, 0},
                             {"pillar1", 2.4, 6.0, ground_y, 0.5, 4.0, 0.5, 0},
@@ -309,8 +309,7 @@ Scene buildingScene(SceneBuilder& sb) {
   int k = 0;
   for (Box& b : boxes) {
     b.x += r.uniform(-0.3, 0.3), b.z += r.uniform(-0.5, 0.5), b.yaw = r.uniform(-20, 20) * deg;
-    const double texel = SceneBuilder::texelFor(b.z, 1.0);
-    sb.box(b, texel, sb.texture(kinds[k++ % 3], std::max(b.w, b.d), std::max(b.h, b.d), texel, 0.5));
+    sb.texturedBox(b, kinds[k++ % 3]);
   }
   return sb.finish();
 }

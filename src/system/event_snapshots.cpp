@@ -16,9 +16,7 @@ namespace eds {
 namespace {
 
 std::filesystem::path snapshotFile(const std::filesystem::path& dir, std::size_t i, const char* what) {
-  char name[40];
-  std::snprintf(name, sizeof name, "ef_%02zu_%s.png", i, what);
-  return dir / name;
+  return numberedFile(dir, "ef_", i, 2, std::string("_") + what + ".png");
 }
 
 // Signed values to 16 bits around 32768; returns the scale (the largest magnitude, 1 for an empty image).

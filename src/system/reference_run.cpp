@@ -19,9 +19,7 @@ namespace eds {
 namespace {
 
 std::filesystem::path keyframeFile(const std::filesystem::path& dir, std::size_t i, const char* ext) {
-  char name[32];
-  std::snprintf(name, sizeof name, "kf_%06zu.%s", i, ext);
-  return dir / name;
+  return numberedFile(dir, "kf_", i, 6, std::string(".") + ext);
 }
 
 std::vector<KeyframePoint> readPoints(const std::filesystem::path& file, int width, int height) {
