@@ -18,6 +18,9 @@ void EventFrameConfig::validate() const {
   if (!(compensation_lookahead >= 0 && compensation_lookahead <= 10))
     throw std::invalid_argument("event frame: compensation_lookahead must be in [0, 10], got " +
                                 std::to_string(compensation_lookahead));
+  if (!(max_rate_hz >= 0))
+    throw std::invalid_argument("event frame: max_rate_hz must be >= 0 (0: no cap), got " +
+                                std::to_string(max_rate_hz));
 }
 
 std::size_t EventFrameConfig::stride() const {

@@ -39,6 +39,10 @@ struct EventFrameConfig {
   // that many events (1.0 measured better than 2.0 on the simulated room; 0 keeps only the turns
   // that complete inside the packet, and with 0 or 0.5 tracking-only on the simulated desk diverged).
   double compensation_lookahead = 1.0;
+  // At most this many event frames per second (0: no cap). Where the events come faster, a packet
+  // starts no earlier than 1 / max_rate_hz after the one before, and the events between are not
+  // framed: the work per second then stops growing with the event rate.
+  double max_rate_hz = 0;
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
   std::size_t stride() const;     // events between consecutive packets' starts
@@ -46,7 +50,7 @@ struct EventFrameConfig {
 };
 
 EDS_FIELDS(EventFrameConfig, num_events, overlap, sigma_frac, blur, reversal_compensation,
-           compensation_lookahead)
+           compensation_lookahead, max_rate_hz)
 
 struct EventFrame {
   TimeNs t = 0;  // the median event's time

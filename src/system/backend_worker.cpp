@@ -129,9 +129,9 @@ void BackendWorker::process(KeyframeJob& job) {
   const double ba_ms = msSince(t1);
   if (logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug,
-        "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers",
-        next_id_, toSeconds(job.t), pts.size(), window_.size(), window_.numPoints(), st.initial_rmse,
-        st.final_rmse, st.iterations, st.outliers_removed);
+         "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers",
+         next_id_, toSeconds(job.t), pts.size(), window_.size(), window_.numPoints(), st.initial_rmse,
+         st.final_rmse, st.iterations, st.outliers_removed);
   TrackingReference ref;
   ref.id = next_id_++;
   const BaFrame& nf = window_.newest();

@@ -279,7 +279,7 @@ class Odometry::Impl {
         core_(camera, cfg_, res_),
         builder_(core_.undistorter(), cfg_.event_frame),
         n_(static_cast<std::size_t>(cfg_.event_frame.num_events)),
-        stride_(cfg_.event_frame.stride()),
+        starts_(cfg_.event_frame.stride(), cfg_.event_frame.max_rate_hz),
         lookahead_(cfg_.event_frame.lookahead()),
         flicker_(camera.width, camera.height, cfg_.flicker_filter) {}
 
@@ -403,7 +403,9 @@ class Odometry::Impl {
 
   // Every packet whose events (and lookahead) have arrived; at the end, every complete packet.
   void buildPackets(bool at_end) {
-    while (buf_.size() >= pos_ + n_ + (at_end ? 0 : lookahead_)) {
+    for (;;) {
+      starts_.skip(buf_, pos_);
+      if (buf_.size() < pos_ + n_ + (at_end ? 0 : lookahead_)) break;
       EventFrame ef;
       if (!spare_.empty()) {
         ef = std::move(spare_.back());
@@ -411,7 +413,7 @@ class Odometry::Impl {
       }
       builder_.build(buf_, pos_, ef, base_);
       efs_.push_back(std::move(ef));
-      pos_ += stride_;
+      starts_.advance(buf_, pos_);
     }
   }
 
@@ -487,7 +489,9 @@ class Odometry::Impl {
   OdometryResult res_;
   Core core_;
   EventFrameBuilder builder_;
-  std::size_t n_, stride_, lookahead_;
+  std::size_t n_;
+  PacketStarts starts_;
+  std::size_t lookahead_;
   // Events not yet in a packet (from pos_ on) and the packets' lookahead; base_: stream index of buf_[0].
   EventArray buf_;
   FlickerFilter flicker_;  // in front of buf_: flickering pixels' events never enter it

@@ -192,6 +192,9 @@ OdometryConfig defaultOdometryConfig(int width, int height) {
   c.events.points.fraction = 0.12 + f * (0.07 - 0.12);
   if (f >= 0.5) c.frame_tracker.levels += 1, c.bootstrap.tracker.levels += 1;
   c.backend.points_per_keyframe = static_cast<int>(std::lround(300 * (1 + f)));
+  // From 640x480 on, event rates of 10 M/s and more would make 400 event frames a second and more:
+  // at most 100 keep the work and the memory bounded for a small loss (docs/experiments.md).
+  if (f >= 1) c.event_frame.max_rate_hz = 100;
   return c;
 }
 

@@ -19,13 +19,15 @@ void checkSameCamera(const CameraModel& a, const CameraModel& b, const std::stri
   const auto close = [](double x, double y) { return std::abs(x - y) <= 1e-6 * std::max(1.0, std::abs(y)); };
   if (a.width != b.width || a.height != b.height || !close(a.fx, b.fx) || !close(a.fy, b.fy) ||
       !close(a.cx, b.cx) || !close(a.cy, b.cy))
-    throw InputError(source, "the run's camera differs from the sequence's (a reference map holds only for the "
-                             "camera it was made with; pass the same --calib to both)");
+    throw InputError(source,
+                     "the run's camera differs from the sequence's (a reference map holds only for the "
+                     "camera it was made with; pass the same --calib to both)");
 }
 
 // Index of the keyframe nearest in time to t (keyframes in time order).
 std::size_t nearestKeyframe(const std::vector<Keyframe>& kfs, TimeNs t) {
-  const auto it = std::lower_bound(kfs.begin(), kfs.end(), t, [](const Keyframe& k, TimeNs v) { return k.t < v; });
+  const auto it =
+      std::lower_bound(kfs.begin(), kfs.end(), t, [](const Keyframe& k, TimeNs v) { return k.t < v; });
   if (it == kfs.begin()) return 0;
   if (it == kfs.end()) return kfs.size() - 1;
   const auto i = static_cast<std::size_t>(it - kfs.begin());
@@ -73,8 +75,9 @@ TrackOnlyResult trackAgainstReference(const Sequence& seq, const ReferenceRun& r
   };
   EventFrameBuilder builder(und, cfg.event_frame);
   auto src = seq.openEvents();
-  EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events), cfg.event_frame.stride(),
-                            cfg.event_frame.lookahead());
+  EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
+                            cfg.event_frame.stride(), cfg.event_frame.lookahead(),
+                            cfg.event_frame.max_rate_hz);
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;
@@ -111,8 +114,8 @@ TrackOnlyResult trackAgainstReference(const Sequence& seq, const ReferenceRun& r
     res.correlations.push_back(front.lastCorrelation());
   }
   if (res.event_frames == 0)
-    throw InputError(seq.eventsFile().string(), "not one event frame of " +
-                                                    std::to_string(cfg.event_frame.num_events) + " events");
+    throw InputError(seq.eventsFile().string(),
+                     "not one event frame of " + std::to_string(cfg.event_frame.num_events) + " events");
   res.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();
   return res;
 }

@@ -214,6 +214,54 @@ TEST(EventFrame, CompensatedFramesFromAStreamEqualThoseFromTheWholeArray) {
   EXPECT_EQ(differing, 0u);
 }
 
+// Packet starts of a capped stream read in chunks of `chunk` events.
+std::vector<std::uint64_t> cappedStarts(const EventArray& all, std::size_t chunk, double max_rate_hz) {
+  struct Source : EventSource {
+    const EventArray& all;
+    std::size_t chunk, pos = 0;
+    Source(const EventArray& a, std::size_t c) : all(a), chunk(c) {}
+    std::size_t read(EventArray& out, std::size_t max_events) override {
+      const std::size_t n = std::min({max_events, chunk, all.size() - pos});
+      for (std::size_t i = pos; i < pos + n; ++i) out.push_back(all.t[i], all.x[i], all.y[i], all.p[i]);
+      pos += n;
+      return n;
+    }
+  } src(all, chunk);
+  EventPacketStream stream(src, 1000, 500, 1000, max_rate_hz);
+  const EventArray* events = nullptr;
+  std::size_t begin = 0;
+  std::vector<std::uint64_t> starts;
+  while (stream.next(events, begin)) starts.push_back(stream.base() + begin);
+  return starts;
+}
+
+TEST(EventPackets, ARateCapSpacesPacketsInTimeWhateverTheChunks) {
+  // 3 s of events: 10 k events/s (a packet every 50 ms), then 2 M events/s (every 0.25 ms), then
+  // 10 k events/s again.
+  EventArray all;
+  for (TimeNs t = 0, i = 0; t < fromSeconds(3.0); ++i) {
+    t += t < fromSeconds(1.0) || t >= fromSeconds(2.0) ? 100'000 : 500;
+    all.push_back(t, static_cast<std::uint16_t>(i % 240), static_cast<std::uint16_t>(i % 180),
+                  i % 3 ? 1 : -1);
+  }
+  const std::vector<std::uint64_t> uncapped = cappedStarts(all, 1 << 18, 0);
+  const std::vector<std::uint64_t> capped = cappedStarts(all, 1 << 18, 100);
+  EXPECT_EQ(capped, cappedStarts(all, 777, 100));  // the same packets, whatever the chunks
+  std::size_t slow_uncapped = 0, slow_capped = 0;
+  for (std::uint64_t s : uncapped) slow_uncapped += all.t[s] < fromSeconds(1.0) ? 1 : 0;
+  for (std::uint64_t s : capped) slow_capped += all.t[s] < fromSeconds(1.0) ? 1 : 0;
+  EXPECT_EQ(slow_capped, slow_uncapped);  // 20 packets/s: under the cap, untouched
+  // The fast second: 4000 packets uncapped, at most 100 + 1 capped, never closer than 10 ms.
+  std::size_t fast = 0;
+  for (std::size_t k = 0; k < capped.size(); ++k) {
+    if (k > 0) EXPECT_GE(all.t[capped[k]] - all.t[capped[k - 1]], fromSeconds(0.01)) << k;
+    fast += all.t[capped[k]] >= fromSeconds(1.0) && all.t[capped[k]] < fromSeconds(2.0) ? 1 : 0;
+  }
+  EXPECT_GE(fast, 99u);
+  EXPECT_LE(fast, 101u);
+  EXPECT_GT(uncapped.size(), 4000u);
+}
+
 Keyframe syntheticKeyframe(const CameraModel& cam, int n, unsigned seed) {
   Keyframe kf;
   std::mt19937 rng(seed);

@@ -211,6 +211,8 @@ TEST(OdometryConfigIo, DefaultsFollowTheSensorSize) {
   EXPECT_NEAR(vga.events.points.fraction, 0.07, 1e-12);
   EXPECT_EQ(vga.frame_tracker.levels, base.frame_tracker.levels + 1);
   EXPECT_EQ(vga.backend.points_per_keyframe, 2 * base.backend.points_per_keyframe);
+  EXPECT_EQ(small.event_frame.max_rate_hz, 0.0);  // no cap where event rates are a few M/s
+  EXPECT_EQ(vga.event_frame.max_rate_hz, 100.0);
   EXPECT_EQ(defaultOdometryConfig(1280, 720).event_frame.num_events, 80000);
   // DAVIS346 (346x260) lies in between.
   const int n346 = defaultOdometryConfig(346, 260).event_frame.num_events;
