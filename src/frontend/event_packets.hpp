@@ -7,6 +7,7 @@
 
 #include "core/events.hpp"
 #include "core/time.hpp"
+#include "frontend/event_frame.hpp"
 #include "io/event_source.hpp"
 
 namespace eds {
@@ -53,6 +54,10 @@ class EventPacketStream {
   EventPacketStream(EventSource& src, std::size_t n, std::size_t stride, std::size_t lookahead = 0,
                     double max_rate_hz = 0)
       : src_(src), n_(n), lookahead_(lookahead), starts_(stride, max_rate_hz) {}
+  // The packets an EventFrameBuilder with `cfg` builds its event frames from.
+  EventPacketStream(EventSource& src, const EventFrameConfig& cfg)
+      : EventPacketStream(src, static_cast<std::size_t>(cfg.num_events), cfg.stride(), cfg.lookahead(),
+                          cfg.max_rate_hz) {}
   // The next packet: events [begin, begin + N) of *events. False at the end of the stream.
   bool next(const EventArray*& events, std::size_t& begin) {
     do {

@@ -82,10 +82,6 @@ void appendImu(const FlatTable& packet, const std::string& file, std::uint64_t p
 
 }  // namespace
 
-bool looksLikeAedat4(const std::filesystem::path& file) {
-  return fileStartsWith(file, std::string_view(kMagic, kMagicSize));
-}
-
 struct Aedat4Reader::Impl {
   BinaryFile file;
   std::vector<Aedat4Stream> streams;

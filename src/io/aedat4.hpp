@@ -34,15 +34,17 @@ struct Aedat4Frame {
   std::uint64_t packet_offset = 0;
 };
 
-bool looksLikeAedat4(const std::filesystem::path& file);
-
 class Aedat4Reader {
  public:
+  // Reads the magic line and the IOHeader; InputError naming the file and byte offset when malformed.
   explicit Aedat4Reader(const std::filesystem::path& file);
   ~Aedat4Reader();
-  const std::string& path() const;
+  // The streams the header's XML describes, in its order.
   const std::vector<Aedat4Stream>& streams() const;
+  const std::string& path() const;
+  // The next packet in file order, decompressed; false at the end of the packets.
   bool next(Aedat4Packet& packet);
+  // Back to a packet found by an earlier scan (a frame's `packet_offset`), or to the first one.
   void seekPacket(std::uint64_t offset);
   void rewind();
 

@@ -9,13 +9,23 @@ InputError errorAt(const std::string& file, std::uint64_t offset, const std::str
   return InputError(file, "byte " + std::to_string(offset) + ": " + what);
 }
 
-bool fileStartsWith(const std::filesystem::path& file, std::string_view magic) {
+FileFormat sniffFileFormat(const std::filesystem::path& file) {
+  // Prophesee .raw files open with a text header whose lines start with "% ".
+  static constexpr std::pair<std::string_view, FileFormat> kMagics[] = {
+      {"#ROSBAG V2.0\n", FileFormat::kRosBag1},
+      {std::string_view("SQLite format 3", 16), FileFormat::kSqlite},
+      {"\x89MCAP0\r\n", FileFormat::kMcap},
+      {"#!AER-DAT4.0\r\n", FileFormat::kAedat4},
+      {std::string_view("\x89HDF\r\n\x1a\n", 8), FileFormat::kHdf5},
+      {"% ", FileFormat::kPropheseeRaw}};
   std::FILE* f = std::fopen(file.c_str(), "rb");
-  if (!f) return false;
-  std::string head(magic.size(), '\0');
-  const bool ok = std::fread(head.data(), 1, head.size(), f) == head.size() && head == magic;
+  if (!f) return FileFormat::kUnknown;
+  char head[16];
+  const std::size_t n = std::fread(head, 1, sizeof head, f);
   std::fclose(f);
-  return ok;
+  for (const auto& [magic, format] : kMagics)
+    if (std::string_view(head, n).starts_with(magic)) return format;
+  return FileFormat::kUnknown;
 }
 
 BinaryFile::BinaryFile(const std::filesystem::path& path) : path_(path.string()) {

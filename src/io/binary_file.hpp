@@ -18,8 +18,11 @@ namespace eds {
 // An InputError at a byte offset of a file: "FILE: byte N: what".
 InputError errorAt(const std::string& file, std::uint64_t offset, const std::string& what);
 
-// True when the file exists and its first bytes are `magic` (telling a format by content).
-bool fileStartsWith(const std::filesystem::path& file, std::string_view magic);
+// The file formats eds tells apart by their first bytes, whatever the file is called.
+enum class FileFormat { kUnknown, kRosBag1, kSqlite, kMcap, kAedat4, kHdf5, kPropheseeRaw };
+
+// The format of a file by its magic bytes; kUnknown for a missing file or one of no format listed.
+FileFormat sniffFileFormat(const std::filesystem::path& file);
 
 class BinaryFile {
  public:

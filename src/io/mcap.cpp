@@ -13,7 +13,6 @@ constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 constexpr std::uint64_t kMaxRecordBytes = 1ull << 31;
 
 enum Op : std::uint8_t {
-  kHeader = 0x01,
   kFooter = 0x02,
   kSchema = 0x03,
   kChannel = 0x04,

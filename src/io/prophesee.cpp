@@ -122,7 +122,6 @@ void Evt2Decoder::decode(const std::uint32_t* words, std::size_t n, EventArray& 
   }
 }
 
-bool looksLikePropheseeRaw(const std::filesystem::path& file) { return fileStartsWith(file, "% "); }
 
 namespace {
 

@@ -78,7 +78,6 @@ struct PropheseeHeader {
 // encoding other than EVT 2.0 / 3.0.
 PropheseeHeader readPropheseeHeader(const std::filesystem::path& file);
 // True when the file starts like a Metavision .raw file ("% " header line).
-bool looksLikePropheseeRaw(const std::filesystem::path& file);
 
 struct PropheseeOptions {
   int width = 0, height = 0;  // override the header's sensor size (required when it has none)

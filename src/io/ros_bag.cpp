@@ -105,10 +105,12 @@ RosContainer detectRosContainer(const std::filesystem::path& path) {
     const auto file = storageFileOf(path);
     return file.empty() ? RosContainer::kNone : detectRosContainer(file);
   }
-  if (looksLikeRosBag1(path)) return RosContainer::kRosBag1;
-  if (fileStartsWith(path, std::string_view("SQLite format 3", 16))) return RosContainer::kSqlite;
-  if (fileStartsWith(path, "\x89MCAP0\r\n")) return RosContainer::kMcap;
-  return RosContainer::kNone;
+  switch (sniffFileFormat(path)) {
+    case FileFormat::kRosBag1: return RosContainer::kRosBag1;
+    case FileFormat::kSqlite: return RosContainer::kSqlite;
+    case FileFormat::kMcap: return RosContainer::kMcap;
+    default: return RosContainer::kNone;
+  }
 }
 
 std::unique_ptr<RosBagReader> openRosBag(const std::filesystem::path& path) {

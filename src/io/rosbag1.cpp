@@ -16,14 +16,8 @@ constexpr char kMagic[] = "#ROSBAG V2.0\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::uint32_t kMaxRecordBytes = 1u << 30;  // a larger header or message is a corrupt length
 
-enum Op : std::uint8_t {
-  kMessage = 0x02,
-  kBagHeader = 0x03,
-  kIndexData = 0x04,
-  kChunk = 0x05,
-  kChunkInfo = 0x06,
-  kConnection = 0x07
-};
+// The record opcodes ("op" header field) of bag format 2.0 run consecutively from 0x02.
+enum Op : std::uint8_t { kMessage = 0x02, kBagHeader, kIndexData, kChunk, kChunkInfo, kConnection };
 
 // The `name=value` fields of a record header.
 struct RecordHeader {
@@ -78,10 +72,6 @@ void decompressBz2(std::vector<std::uint8_t>& in, std::vector<std::uint8_t>& out
 }
 
 }  // namespace
-
-bool looksLikeRosBag1(const std::filesystem::path& file) {
-  return fileStartsWith(file, std::string_view(kMagic, kMagicSize));
-}
 
 struct RosBag1Reader::Impl {
   BinaryFile file;

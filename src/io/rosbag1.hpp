@@ -28,8 +28,6 @@ struct BagMessage {
   ByteView data{nullptr, 0, nullptr, 0};
 };
 
-bool looksLikeRosBag1(const std::filesystem::path& file);
-
 class RosBag1Reader {
  public:
   // Reads the bag header and the index at its end (connections, message counts). InputError naming

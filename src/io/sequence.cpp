@@ -234,17 +234,10 @@ const CameraModel& Sequence::camera() const {
   return *camera_;
 }
 
-namespace {
-
-bool isHdf5File(const fs::path& file) {
-  return fileStartsWith(file, std::string_view("\x89HDF\r\n\x1a\n", 8));
-}
-
-}  // namespace
-
 void Sequence::openRecordingFile(const fs::path& file) {
   events_file_ = file;
-  if (looksLikeAedat4(file)) {
+  const FileFormat file_format = sniffFileFormat(file);
+  if (file_format == FileFormat::kAedat4) {
     const Aedat4Counts counts = scanAedat4(file);
     event_storage_ = EventStorage::kAedat4;
     format_ = "AEDAT 4.0";
@@ -259,7 +252,7 @@ void Sequence::openRecordingFile(const fs::path& file) {
     if (counts.events == 0) events_file_.clear();
     return;
   }
-  if (looksLikePropheseeRaw(file)) {
+  if (file_format == FileFormat::kPropheseeRaw) {
     const PropheseeHeader h = readPropheseeHeader(file);
     event_storage_ = EventStorage::kPropheseeRaw;
     format_ = h.format == EvtFormat::kEvt3 ? "Prophesee EVT 3.0" : "Prophesee EVT 2.0";
@@ -271,7 +264,7 @@ void Sequence::openRecordingFile(const fs::path& file) {
     openRosRecording(file);
     return;
   }
-  const Hdf5Layout layout = isHdf5File(file) ? detectHdf5Layout(file) : Hdf5Layout::kNone;
+  const Hdf5Layout layout = file_format == FileFormat::kHdf5 ? detectHdf5Layout(file) : Hdf5Layout::kNone;
   if (layout == Hdf5Layout::kMvsec || layout == Hdf5Layout::kM3ed) {
     event_storage_ = layout == Hdf5Layout::kMvsec ? EventStorage::kHdf5Mvsec : EventStorage::kHdf5;
     format_ =
@@ -284,7 +277,7 @@ void Sequence::openRecordingFile(const fs::path& file) {
     if (layout == Hdf5Layout::kM3ed) hdf5_group_ = "prophesee/left";
     return;
   }
-  if (isHdf5File(file)) {
+  if (file_format == FileFormat::kHdf5) {
     event_storage_ = EventStorage::kHdf5;
     format_ = "HDF5 events";
     width_ = options_.width, height_ = options_.height;

@@ -219,9 +219,7 @@ TrackOnlyResult runTrackOnly(const Sequence& seq, const TrackOnlyConfig& cfg) {
   const TimeNs t_end =
       cfg.duration_s > 0 ? frames[0].t + fromSeconds(cfg.duration_s) : std::numeric_limits<TimeNs>::max();
   auto src = seq.openEvents();
-  EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
-                            cfg.event_frame.stride(), cfg.event_frame.lookahead(),
-                            cfg.event_frame.max_rate_hz);
+  EventPacketStream packets(*src, cfg.event_frame);
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;

@@ -75,9 +75,7 @@ TrackOnlyResult trackAgainstReference(const Sequence& seq, const ReferenceRun& r
   };
   EventFrameBuilder builder(und, cfg.event_frame);
   auto src = seq.openEvents();
-  EventPacketStream packets(*src, static_cast<std::size_t>(cfg.event_frame.num_events),
-                            cfg.event_frame.stride(), cfg.event_frame.lookahead(),
-                            cfg.event_frame.max_rate_hz);
+  EventPacketStream packets(*src, cfg.event_frame);
   const EventArray* events = nullptr;
   std::size_t begin = 0;
   EventFrame ef;

@@ -198,7 +198,7 @@ TEST(EventFrame, CompensatedFramesFromAStreamEqualThoseFromTheWholeArray) {
   EventFrameConfig cfg;
   cfg.num_events = 4000;
   ChunkedSource src(all);
-  EventPacketStream stream(src, cfg.num_events, cfg.stride(), cfg.lookahead());
+  EventPacketStream stream(src, cfg);
   EventFrameBuilder from_stream(und, cfg), from_array(und, cfg);
   const EventArray* events = nullptr;
   std::size_t begin = 0, frames = 0, differing = 0;

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "core/error.hpp"
+#include "io/binary_file.hpp"
 #include "io/ecd_events.hpp"
 #include "io/sequence.hpp"
 #include "io/trajectory_io.hpp"
@@ -189,6 +190,24 @@ TEST_F(BadInput, TumDecreasingTimestamps) {
 }
 
 // --- sequence folders ---
+TEST_F(BadInput, FormatsAreToldByTheirFirstBytesNotTheirNames) {
+  const std::pair<std::string, FileFormat> cases[] = {
+      {"#ROSBAG V2.0\nop=", FileFormat::kRosBag1},
+      {std::string("SQLite format 3\0\x10", 17), FileFormat::kSqlite},
+      {"\x89MCAP0\r\n\x01", FileFormat::kMcap},
+      {"#!AER-DAT4.0\r\n\x20", FileFormat::kAedat4},
+      {"\x89HDF\r\n\x1a\n\x00", FileFormat::kHdf5},
+      {"% evt 3.0\n", FileFormat::kPropheseeRaw},
+      {"#ROSBAG V1.2\n", FileFormat::kUnknown},                    // an older bag version eds does not read
+      {std::string("SQLite format 3", 15), FileFormat::kUnknown},  // cut short before its NUL
+      {"", FileFormat::kUnknown}};
+  int i = 0;
+  for (const auto& [content, format] : cases)
+    EXPECT_EQ(sniffFileFormat(write("recording" + std::to_string(i++) + ".txt", content)), format) << content;
+  EXPECT_EQ(sniffFileFormat(dir_ / "missing.bag"), FileFormat::kUnknown);
+  EXPECT_EQ(sniffFileFormat(dir_), FileFormat::kUnknown);
+}
+
 TEST_F(BadInput, MissingSequenceFolder) {
   expectError([&] { Sequence seq(dir_ / "nope"); }, dir_ / "nope", 0, "not found");
 }
