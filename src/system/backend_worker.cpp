@@ -12,8 +12,12 @@
 namespace eds {
 
 BackendWorker::BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping,
-                             const BackendConfig& backend, bool threaded)
-    : cam_(pinhole), mcfg_(mapping), window_(pinhole, backend), threaded_(threaded) {
+                             const BackendConfig& backend, bool threaded, StageClock* caller_clock)
+    : cam_(pinhole),
+      mcfg_(mapping),
+      window_(pinhole, backend),
+      threaded_(threaded),
+      caller_clock_(caller_clock) {
   mcfg_.points.validate();
   if (threaded_) thread_ = std::thread([this] { run(); });
 }
@@ -47,6 +51,7 @@ bool BackendWorker::busy() const {
 
 void BackendWorker::waitIdle() {
   if (!threaded_) return;
+  const ScopedStage waiting(caller_clock_, Stage::kWaiting);
   std::unique_lock<std::mutex> lock(mutex_);
   cv_.wait(lock, [this] { return !working_ && queue_.empty(); });
 }
@@ -57,6 +62,7 @@ void BackendWorker::finish() {
     finished_ = true;
     return;
   }
+  const ScopedStage waiting(caller_clock_, Stage::kWaiting);
   std::unique_lock<std::mutex> lock(mutex_);
   finish_ = true;
   cv_.notify_all();
@@ -64,6 +70,7 @@ void BackendWorker::finish() {
 }
 
 void BackendWorker::finalSolve() {
+  const ScopedStage ba(threaded_ ? &thread_clock_ : caller_clock_, Stage::kBundleAdjustment);
   window_.optimize();
   window_.flush();
 }
@@ -102,7 +109,9 @@ void BackendWorker::run() {
 }
 
 void BackendWorker::process(KeyframeJob& job) {
+  StageClock* clock = threaded_ ? &thread_clock_ : caller_clock_;
   const auto t0 = Clock::now();
+  std::optional<ScopedStage> stage(std::in_place, clock, Stage::kMapping);
   Keyframe kf;
   setKeyframeImage(kf, job.image);
   std::vector<KeyframePoint>& pts = job.points;
@@ -124,9 +133,11 @@ void BackendWorker::process(KeyframeJob& job) {
   }
   window_.addKeyframe(next_id_, job.t, job.T_w_kf, job.a, job.b, kf.image, pts);
   const double map_ms = msSince(t0);
+  stage.emplace(clock, Stage::kBundleAdjustment);
   const auto t1 = Clock::now();
   const BaStats st = window_.optimize();
   const double ba_ms = msSince(t1);
+  stage.reset();
   if (logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug,
          "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers",

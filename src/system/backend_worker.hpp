@@ -13,10 +13,11 @@
 #include <vector>
 
 #include "backend/sliding_window.hpp"
+#include "core/reflect.hpp"
 #include "frontend/point_selection.hpp"
 #include "mapping/depth_fill.hpp"
 #include "mapping/epipolar_search.hpp"
-#include "core/reflect.hpp"
+#include "system/stage_clock.hpp"
 
 namespace eds {
 
@@ -30,7 +31,8 @@ struct MappingConfig {
   double min_intensity = 0.02, max_intensity = 0.98;  // black or saturated pixels are not selected
 };
 
-EDS_FIELDS(MappingConfig, points, fill, search, epipolar_search, search_max_disagreement, min_intensity, max_intensity)
+EDS_FIELDS(MappingConfig, points, fill, search, epipolar_search, search_max_disagreement, min_intensity,
+           max_intensity)
 
 struct KeyframeJob {
   TimeNs t = 0;
@@ -54,8 +56,10 @@ struct BackendTimings {
 
 class BackendWorker {
  public:
+  // `caller_clock` (may be null): the submitting thread's stage clock; it is charged with the waits
+  // for the worker and, without a thread, with the mapping and the bundle adjustment.
   BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping, const BackendConfig& backend,
-                bool threaded);
+                bool threaded, StageClock* caller_clock = nullptr);
   ~BackendWorker();
   BackendWorker(const BackendWorker&) = delete;
   BackendWorker& operator=(const BackendWorker&) = delete;
@@ -73,6 +77,8 @@ class BackendWorker {
   // After waitIdle(): the window (for outputs) and the timings.
   SlidingWindow& window() { return window_; }
   const BackendTimings& timings() const { return timings_; }
+  // After finish(), threaded: the worker thread's time by stage (mapping, bundle adjustment, idle).
+  StageSeconds threadStageSeconds() { return thread_clock_.seconds(); }
 
  private:
   void run();
@@ -89,6 +95,8 @@ class BackendWorker {
   int next_id_ = 0;
 
   bool threaded_;
+  StageClock* caller_clock_;
+  StageClock thread_clock_{Stage::kIdle};  // only the worker thread uses it until finish()
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<KeyframeJob> queue_;

@@ -46,11 +46,12 @@ double depthRatio(const std::vector<KeyframePoint>& pts) {
 }
 }  // namespace
 
-FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res)
+FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res,
+                             StageClock* clock)
     : cam_(cam),
       cfg_(cfg),
       res_(res),
-      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend),
+      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock),
       tracker_(cam, cfg.frame_tracker) {}
 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,

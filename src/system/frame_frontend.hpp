@@ -20,7 +20,9 @@ Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const Came
 
 class FrameFrontend {
  public:
-  FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res);
+  // `clock` (may be null): the calling thread's stage clock, passed on to the back-end worker.
+  FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res,
+                StageClock* clock = nullptr);
 
   // Hands a keyframe to the back-end (mapping + BA). Returns the pose of the keyframe's frame: the
   // optimized one when the back-end ran at once (synchronous), else the given one.

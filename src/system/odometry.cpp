@@ -55,18 +55,20 @@ namespace {
 // the event front-end, each given in time order.
 class Core {
  public:
-  Core(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res)
+  Core(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res, StageClock& clock)
       : cfg_(cfg),
         res_(res),
+        clock_(clock),
         und_(camera),
         quality_(cfg.frame_quality),
-        odo_(und_.pinhole(), cfg, res),
+        odo_(und_.pinhole(), cfg, res, &clock),
         boot_(und_.pinhole(), cfg.bootstrap),
         events_(und_.pinhole(), cfg.events) {}
 
   // A raw 8-bit frame.
   void frame(TimeNs t, const cv::Mat& raw) {
     ++res_.frames_in;
+    std::optional<ScopedStage> stage(std::in_place, &clock_, Stage::kFramePreparation);
     if (std::string why = quality_.check(t, raw); !why.empty()) {
       ++res_.frames_rejected;
       res_.failures.push_back({t, "frame not used: " + why});
@@ -76,6 +78,7 @@ class Core {
     und_.undistortImage(raw).convertTo(img, CV_32F, 1.0 / 255.0);
     last_t_ = t;
     if (!res_.initialized) {
+      stage.emplace(&clock_, Stage::kBootstrap);
       // The events' pose at this frame, tracked against the bootstrap's reference, seeds its alignment.
       SE3 hint;
       const bool has_hint = has_boot_event_ && std::llabs(t - boot_event_.t) < fromSeconds(0.05);
@@ -87,6 +90,7 @@ class Core {
       return;
     }
     // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
+    stage.emplace(&clock_, Stage::kFrameTracking);
     const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
     const SE3 T_w_f = odo_.track(t, img, prior ? &last_event_.T_w_c : nullptr);
     res_.frames.push_back({t, T_w_f});
@@ -96,6 +100,7 @@ class Core {
   }
 
   void eventFrame(const EventFrame& ef) {
+    const ScopedStage stage(&clock_, Stage::kEventTracking);
     ++res_.event_frames;
     if (!res_.initialized) {
       // Kept until the map exists, then tracked (poses from the bootstrap's reference frame on: older
@@ -209,6 +214,7 @@ class Core {
   void trackEvents(const EventFrame& ef, const SE3* prior,
                    const std::function<bool(const SE3&)>& plausible = nullptr,
                    const std::pair<const StampedPose*, const StampedPose*>& bracket = {}) {
+    const ScopedStage stage(&clock_, Stage::kEventTracking);
     const auto t0 = Clock::now();
     std::string why;
     const std::optional<SE3> T = bracket.first
@@ -248,6 +254,7 @@ class Core {
 
   const OdometryConfig& cfg_;
   OdometryResult& res_;
+  StageClock& clock_;
   Undistorter und_;
   FrameQualityGate quality_;
   FrameFrontend odo_;
@@ -276,7 +283,7 @@ class Odometry::Impl {
       : wall0_(Clock::now()),
         cfg_(validated(cfg, camera)),
         listener_(listener),
-        core_(camera, cfg_, res_),
+        core_(camera, cfg_, res_, clock_),
         builder_(core_.undistorter(), cfg_.event_frame),
         n_(static_cast<std::size_t>(cfg_.event_frame.num_events)),
         starts_(cfg_.event_frame.stride(), cfg_.event_frame.max_rate_hz),
@@ -284,9 +291,11 @@ class Odometry::Impl {
         flicker_(camera.width, camera.height, cfg_.flicker_filter) {}
 
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
+    const ScopedStage api(&clock_, Stage::kUnaccounted);
     checkOpen();
     if (!cfg_.use_events) return;
     end = std::min(end, ev.size());
+    std::optional<ScopedStage> intake(std::in_place, &clock_, Stage::kEventIntake);
     const int w = core_.undistorter().raw().width, h = core_.undistorter().raw().height;
     TimeNs prev = checked_t_;  // committed only when the whole chunk is valid
     for (std::size_t i = begin; i < end; ++i) {
@@ -303,6 +312,7 @@ class Odometry::Impl {
     }
     checked_t_ = prev;
     events_in_ += end - begin;
+    intake.reset();
     for (std::size_t i = begin; i < end;) {
       // Appends no more than the next packet needs, so that every packet is built as soon as it can
       // be whatever the chunk size (the same event frames, in the same order).
@@ -317,6 +327,7 @@ class Odometry::Impl {
   }
 
   void addFrame(TimeNs t, const cv::Mat& gray8) {
+    const ScopedStage api(&clock_, Stage::kUnaccounted);
     checkOpen();
     const cv::Size size(core_.undistorter().raw().width, core_.undistorter().raw().height);
     if (gray8.empty() || gray8.type() != CV_8UC1 || gray8.size() != size)
@@ -329,17 +340,22 @@ class Odometry::Impl {
                                   " ns)");
     has_frame_in_ = true;
     last_frame_in_ = t;
-    frames_.push_back({t, gray8.clone()});
+    {
+      const ScopedStage prep(&clock_, Stage::kFramePreparation);
+      frames_.push_back({t, gray8.clone()});
+    }
     dispatch(false);
   }
 
   const OdometryResult& finish() {
+    const ScopedStage api(&clock_, Stage::kUnaccounted);
     checkOpen();
     finished_ = true;
     buildPackets(true);
     dispatch(true);
     FrameFrontend& odo = core_.frontend();
     odo.worker().finish();
+    const ScopedStage results(&clock_, Stage::kResults);
     const SlidingWindow& window = odo.worker().window();
     const BackendTimings& bt = odo.worker().timings();
     res_.mapping_ms = bt.mapping_ms;
@@ -358,8 +374,10 @@ class Odometry::Impl {
     TimeNs last_t = core_.lastTime();
     if (!res_.events.empty()) last_t = std::max(last_t, res_.events.back().t);
     res_.sequence_s = has_first_ ? toSeconds(last_t - res_.first_t) : 0.0;
-    res_.wall_s = std::chrono::duration<double>(Clock::now() - wall0_).count();
     res_.peak_rss_mb = peakRssMb();
+    res_.stages_s = clock_.seconds();
+    if (cfg_.threaded_backend) res_.backend_stages_s = odo.worker().threadStageSeconds();
+    res_.wall_s = std::chrono::duration<double>(Clock::now() - wall0_).count();
     return res_;
   }
 
@@ -386,6 +404,7 @@ class Odometry::Impl {
   }
 
   void append(const EventArray& ev, std::size_t a, std::size_t b) {
+    const ScopedStage stage(&clock_, Stage::kEventIntake);
     if (pos_ > (1u << 20)) compact();
     for (std::size_t i = a; i < b; ++i)
       if (flicker_.keep(ev.t[i], ev.x[i], ev.y[i], ev.p[i]))
@@ -403,6 +422,7 @@ class Odometry::Impl {
 
   // Every packet whose events (and lookahead) have arrived; at the end, every complete packet.
   void buildPackets(bool at_end) {
+    const ScopedStage stage(&clock_, Stage::kEventFrames);
     for (;;) {
       starts_.skip(buf_, pos_);
       if (buf_.size() < pos_ + n_ + (at_end ? 0 : lookahead_)) break;
@@ -469,6 +489,7 @@ class Odometry::Impl {
   // Tells the listener what the last item produced.
   void notify() {
     if (!listener_) return;
+    const ScopedStage stage(&clock_, Stage::kResults);
     if (res_.initialized && !told_init_) listener_->onInitialized(res_.init_t), told_init_ = true;
     FrameFrontend& odo = core_.frontend();
     if (res_.initialized && odo.referenceId() != told_kf_) {
@@ -487,6 +508,7 @@ class Odometry::Impl {
   const OdometryConfig cfg_;
   OdometryListener* listener_;
   OdometryResult res_;
+  StageClock clock_{Stage::kInput};  // the calling thread's
   Core core_;
   EventFrameBuilder builder_;
   std::size_t n_;

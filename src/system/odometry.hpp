@@ -159,6 +159,9 @@ struct OdometryResult {
   std::vector<double> track_ms, mapping_ms, ba_ms;  // per frame; per keyframe (both)
   std::vector<int> window_points;                   // per keyframe, after the solve
   double wall_s = 0, sequence_s = 0;
+  // Wall time by stage of the thread that fed the odometry (they add up to wall_s), and of the
+  // threaded back-end's thread (zeros without one).
+  StageSeconds stages_s{}, backend_stages_s{};
   double peak_rss_mb = 0;
   // Stopped on request before the end of the input (what was computed so far is in the result).
   bool interrupted = false;

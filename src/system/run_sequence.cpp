@@ -123,6 +123,18 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
 
 namespace {
 
+// Seconds by stage (those that took any time), and the share of the thread's time they account for.
+nlohmann::json stagesJson(const StageSeconds& s) {
+  nlohmann::json seconds = nlohmann::json::object();
+  double total = 0;
+  for (std::size_t i = 0; i < kStageCount; ++i) {
+    total += s[i];
+    if (s[i] > 0) seconds[stageName(static_cast<Stage>(i))] = std::round(s[i] * 1e4) / 1e4;
+  }
+  const double unaccounted = s[static_cast<std::size_t>(Stage::kUnaccounted)];
+  return {{"seconds", seconds}, {"accounted_fraction", total > 0 ? 1.0 - unaccounted / total : 0.0}};
+}
+
 // Every stage's time per item (ms, to 0.01 ms), for distributions in reports.
 void writeTimings(const std::filesystem::path& file, const OdometryResult& r) {
   const auto rounded = [](const std::vector<double>& v) {
@@ -193,6 +205,9 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   j["sequence_s"] = r.sequence_s;
   j["real_time_factor"] = r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0;
   j["peak_rss_mb"] = r.peak_rss_mb;
+  // The thread that fed the odometry; the back-end's own thread, when it has one, runs beside it.
+  j["stages"] = stagesJson(r.stages_s);
+  if (cfg.threaded_backend) j["backend_thread_stages"] = stagesJson(r.backend_stages_s);
   if (cfg.use_events) {
     const ClockOffsetEstimate off = estimateEventClockOffset(r.frames, r.events);
     if (off.valid)

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <numeric>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -61,6 +62,26 @@ void expectSameOutputs(const std::filesystem::path& a, const std::filesystem::pa
     const std::string ta = test::fileText(a / name), tb = test::fileText(b / name);
     EXPECT_FALSE(ta.empty()) << a / name;
     EXPECT_TRUE(ta == tb) << name << " differs between " << a << " and " << b;
+  }
+}
+
+// The feeding thread's time by stage adds up to the run's wall time, almost all of it in named stages;
+// the stages a run must pass through took time on the thread that runs them.
+void expectStagesAccountForTheWallTime(const OdometryResult& r, bool threaded) {
+  const auto at = [](const StageSeconds& s, Stage st) { return s[static_cast<std::size_t>(st)]; };
+  const double sum = std::accumulate(r.stages_s.begin(), r.stages_s.end(), 0.0);
+  EXPECT_LE(sum, r.wall_s);
+  EXPECT_GE(sum, 0.99 * r.wall_s);
+  EXPECT_LT(at(r.stages_s, Stage::kUnaccounted), 0.1 * r.wall_s);
+  for (Stage st : {Stage::kInput, Stage::kEventIntake, Stage::kEventFrames, Stage::kEventTracking,
+                   Stage::kFramePreparation, Stage::kFrameTracking, Stage::kBootstrap})
+    EXPECT_GT(at(r.stages_s, st), 0.0) << stageName(st);
+  // Mapping and the solve run where the back-end runs: its own thread, or the feeding one.
+  const StageSeconds& backend = threaded ? r.backend_stages_s : r.stages_s;
+  const StageSeconds& other = threaded ? r.stages_s : r.backend_stages_s;
+  for (Stage st : {Stage::kMapping, Stage::kBundleAdjustment}) {
+    EXPECT_GT(at(backend, st), 0.0) << stageName(st);
+    EXPECT_EQ(at(other, st), 0.0) << stageName(st);
   }
 }
 
@@ -150,6 +171,7 @@ TEST(OdometryApi, ProducerThreadGetsEveryResultOnItsOwnThread) {
   ASSERT_GE(rec.keyframes.size(), 5u);
   for (std::size_t k = 1; k < rec.keyframes.size(); ++k) EXPECT_GT(rec.keyframes[k], rec.keyframes[k - 1]);
   EXPECT_EQ(rec.frame_kf.back(), rec.keyframes.back());
+  expectStagesAccountForTheWallTime(got, false);
 }
 
 // The threaded back-end from a producer thread (the live setting): accuracy, not identity, since the
@@ -172,6 +194,7 @@ TEST(OdometryApi, ThreadedBackendFromAProducerThreadIsAccurate) {
   EXPECT_LT(a.trans.rmse * 100, 0.22);
   EXPECT_LT(a.rot.rmse, 0.25);
   EXPECT_GE(a.coverage, 0.9);
+  expectStagesAccountForTheWallTime(r, true);
 }
 
 // Frames that find no events go ahead after stream.max_pending_frames; the events that come later

@@ -69,11 +69,11 @@ TEST(Realtime, AStopRequestEndsTheRun) {
     std::this_thread::sleep_for(std::chrono::milliseconds(700));
     stop = true;
   });
-  const auto t0 = std::chrono::steady_clock::now();
   const OdometryResult r = runOdometryRealtime(seq, cfg, {.speed = 1.0}, &stop);
   stopper.join();
   EXPECT_TRUE(r.interrupted);
-  EXPECT_LT(secondsSince(t0), 5.0);  // not the sequence's 6 s
+  // The feeding stopped about 0.7 s into the 6 s sequence, however slowly this machine processed it.
+  EXPECT_LT(toSeconds(r.interrupted_t - seq.frames().front().t), 3.0);
 }
 
 // A damaged recording: the producer thread's InputError reaches the caller (no terminate()).
