@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "core/camera.hpp"
-#include "core/se3.hpp"
 #include "core/reflect.hpp"
+#include "core/se3.hpp"
 
 namespace eds {
 
@@ -130,6 +130,8 @@ class PhotometricBA {
     Eigen::MatrixXd S;
     Eigen::VectorXd s;
     std::vector<double> hpp_d;
+    Eigen::MatrixXd U;  // the point columns of Hfp, each scaled by 1/√(damped Hpp)
+    Eigen::VectorXd v;  // bp / damped Hpp
   };
   void addPrior(const BaPrior& prior, const std::vector<BaFrame>& frames, const std::vector<int>& slot,
                 NormalEquations& ne) const;

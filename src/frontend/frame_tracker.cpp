@@ -112,19 +112,24 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
     for (double x : rr) c += huberCost(x, d);
     return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
   };
+  static_assert(sizeof(Eigen::Matrix<double, 1, 8>) == 8 * sizeof(double), "Jacobian rows must be packed");
+  using RowsMap = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 8, Eigen::RowMajor>>;
+  Eigen::VectorXd w;
+  Eigen::Matrix<double, Eigen::Dynamic, 8, Eigen::RowMajor> WJ;
   const int start = levels > 0 ? std::min(levels, cfg_.levels) - 1 : cfg_.levels - 1;
   for (int l = start; l >= 0; --l) {
     LmDamping lm(kLambdaInitial, kLambdaFloor);
     if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
     double c0 = cost(r);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
-      Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
-      Eigen::Matrix<double, 8, 1> g = Eigen::Matrix<double, 8, 1>::Zero();
-      for (std::size_t i = 0; i < r.size(); ++i) {
-        const double w = huberWeight(r[i], d);
-        H.noalias() += w * J[i].transpose() * J[i];
-        g.noalias() += w * r[i] * J[i].transpose();
-      }
+      // JᵀWJ and JᵀWr as two matrix products over all rows (the rows are contiguous in J).
+      const auto n = static_cast<Eigen::Index>(r.size());
+      const RowsMap Jm(J.data()->data(), n, 8);
+      w.resize(n);
+      for (Eigen::Index i = 0; i < n; ++i) w[i] = huberWeight(r[static_cast<std::size_t>(i)], d);
+      WJ.noalias() = w.asDiagonal() * Jm;
+      const Eigen::Matrix<double, 8, 8> H = Jm.transpose() * WJ;
+      const Eigen::Matrix<double, 8, 1> g = WJ.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), n);
       bool improved = false;
       for (int tries = 0; tries < 5 && !improved; ++tries) {
         Eigen::MatrixXd Hs = H.topLeftCorner(np, np);

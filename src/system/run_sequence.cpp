@@ -7,7 +7,9 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <thread>
 
+#include "core/bounded_queue.hpp"
 #include "core/error.hpp"
 #include "io/merged_stream.hpp"
 #include "io/output_file.hpp"
@@ -43,32 +45,79 @@ std::vector<std::size_t> selectFrames(const std::vector<FrameRef>& frames, doubl
 
 namespace {
 
-// Pushes the selected frames and the events up to t_end into the odometry in time order: each frame
-// right after the events up to its time stamp.
+// A decoded frame or a chunk of events, from the reading thread to the odometry.
+struct InputItem {
+  bool frame = false;
+  std::size_t index = 0;  // frames: into seq.frames()
+  cv::Mat image;
+  EventArray events;
+};
+
+// The reading thread: the selected frames (decoded) and the events up to t_end, in time order, each
+// frame right after the events up to its time stamp.
+void readSequence(const Sequence& seq, const std::vector<std::size_t>& idx, TimeNs t_end, bool use_events,
+                  BoundedQueue<InputItem>& queue) {
+  MergedStream stream(seq, 1 << 16, use_events);
+  std::size_t next = 0;  // the next selected frame (index into idx)
+  InputItem item;
+  for (auto kind = stream.next(item.events, item.index); kind != MergedStream::Kind::kEnd;
+       kind = stream.next(item.events, item.index)) {
+    item.frame = kind == MergedStream::Kind::kFrame;
+    bool past_range = false;
+    if (item.frame) {
+      if (next == idx.size() || idx[next] != item.index) continue;
+      ++next;
+      item.image = seq.loadFrame(item.index);
+    } else {
+      const EventArray& ev = item.events;
+      const auto end =
+          static_cast<std::size_t>(std::upper_bound(ev.t.begin(), ev.t.end(), t_end) - ev.t.begin());
+      past_range = end < ev.size() && next == idx.size();
+      item.events.resize(end);
+    }
+    if ((item.frame || !item.events.empty()) && !queue.push(std::move(item))) return;
+    item = InputItem{};
+    if (past_range) break;
+  }
+}
+
+// Pushes what the reading thread reads into the odometry. Reading and decoding run beside the
+// tracking, a few items ahead (the queue's bound keeps the memory small).
 // Returns the last input time fed when `stop` ended the feeding early, nullopt at the end of the input.
 std::optional<TimeNs> feedSequence(const Sequence& seq, const std::vector<std::size_t>& idx, TimeNs t_end,
                                    bool use_events, Odometry& odo, const std::function<void(TimeNs)>& report,
                                    const std::atomic<bool>* stop) {
-  MergedStream stream(seq, 1 << 16, use_events);
-  EventArray chunk;
-  std::size_t frame = 0, next = 0;  // next: the next selected frame (index into idx)
-  TimeNs fed = seq.frames()[idx.front()].t;
-  for (auto kind = stream.next(chunk, frame); kind != MergedStream::Kind::kEnd;
-       kind = stream.next(chunk, frame)) {
-    if (stop != nullptr && stop->load(std::memory_order_relaxed)) return fed;
-    if (kind == MergedStream::Kind::kFrame) {
-      if (next == idx.size() || idx[next] != frame) continue;
-      ++next;
-      fed = seq.frames()[frame].t;
-      odo.addFrame(fed, seq.loadFrame(frame));
-      report(fed);
-    } else {
-      const auto end = std::upper_bound(chunk.t.begin(), chunk.t.end(), t_end) - chunk.t.begin();
-      odo.addEvents(chunk, 0, static_cast<std::size_t>(end));
-      if (end > 0) fed = std::max(fed, chunk.t[static_cast<std::size_t>(end) - 1]);
-      if (!chunk.empty()) report(chunk.t.back());
-      if (static_cast<std::size_t>(end) < chunk.size() && next == idx.size()) break;  // past the range
+  BoundedQueue<InputItem> queue(4);
+  std::thread reader([&] {
+    try {
+      readSequence(seq, idx, t_end, use_events, queue);
+      queue.close();
+    } catch (...) {
+      queue.fail(std::current_exception());
     }
+  });
+  // Whatever ends the feeding (the end, a stop, an exception here or from the reader), the reader is
+  // told to stop and joined.
+  struct Joiner {
+    BoundedQueue<InputItem>& q;
+    std::thread& t;
+    ~Joiner() {
+      q.cancel();
+      t.join();
+    }
+  } joiner{queue, reader};
+  TimeNs fed = seq.frames()[idx.front()].t;
+  InputItem item;
+  while (queue.pop(item)) {
+    if (stop != nullptr && stop->load(std::memory_order_relaxed)) return fed;
+    if (item.frame) {
+      fed = seq.frames()[item.index].t;
+      odo.addFrame(fed, item.image);
+    } else {
+      odo.addEvents(item.events, 0, item.events.size());
+      fed = std::max(fed, item.events.t.back());
+    }
+    report(fed);
   }
   return std::nullopt;
 }
