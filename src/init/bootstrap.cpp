@@ -194,10 +194,13 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
 
   const int n_after = static_cast<int>(frames_.size()) - 1;
   if (logEnabled(LogLevel::kDebug))
-    logf(LogLevel::kDebug, "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f",
-         n_after, parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(),
-         fr[1].T_w_c.translation().y(), fr[1].T_w_c.translation().z());
-  if (diverged || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points || n_after > cfg_.max_frames) {
+    logf(LogLevel::kDebug,
+         "bootstrap: frame %d parallax %.2f px rmse %.4f inliers %d/%zu t %.3f %.3f %.3f a %.3f", n_after,
+         parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(), fr[1].T_w_c.translation().y(),
+         fr[1].T_w_c.translation().z(), fr[1].a);
+  const bool exposure_jump = !(std::abs(fr[1].a) <= cfg_.max_log_brightness);
+  if (diverged || exposure_jump || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points ||
+      n_after > cfg_.max_frames) {
     // The geometric path may still make it from this reference (large motion between sparse frames).
     frames_.pop_back();
     images_.pop_back();

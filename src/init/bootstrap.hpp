@@ -19,12 +19,12 @@
 
 #include "backend/photometric_ba.hpp"
 #include "core/camera.hpp"
+#include "core/reflect.hpp"
 #include "core/time.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "init/geometric_init.hpp"
 #include "map/keyframe.hpp"
-#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -41,15 +41,20 @@ struct BootstrapConfig {
   int max_frames = 50;               // no success by then: the newest frame becomes the reference
   double max_parallax_step_px = 25;  // parallax growing faster than this per frame: diverged, restart
   double max_rmse = 0.05;            // two-frame residual RMS (intensity) above this: restart
-  double max_intensity = 0.98;       // pixels this bright (saturated) are not selected
-  double min_intensity = 0.02;       // nor pixels this dark
-  bool geometric = true;             // the essential-matrix path for non-planar scenes (see below)
+  // |a| of the frame's affine brightness (I ≈ e^{-a} I_ref + b) above this: the alignment explained a
+  // wrong geometry with a change of exposure (a pure rotation can do that); restart
+  double max_log_brightness = 1.0;
+  double max_intensity = 0.98;  // pixels this bright (saturated) are not selected
+  double min_intensity = 0.02;  // nor pixels this dark
+  bool geometric = true;        // the essential-matrix path for non-planar scenes (see below)
   GeometricInitConfig geometric_init;
   DepthFillConfig fill{.max_distance_px = 15, .neighbours = 3};
   void validate() const;
 };
 
-EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, depth_prior_weight, min_parallax_px, min_points, min_frames, max_frames, max_parallax_step_px, max_rmse, max_intensity, min_intensity, geometric, geometric_init, fill)
+EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, depth_prior_weight, min_parallax_px, min_points,
+           min_frames, max_frames, max_parallax_step_px, max_rmse, max_log_brightness, max_intensity,
+           min_intensity, geometric, geometric_init, fill)
 
 struct BootstrapFrame {
   TimeNs t = 0;
@@ -84,9 +89,10 @@ class Bootstrap {
  private:
   bool setReference(TimeNs t, const cv::Mat& image);
   bool tryGeometry(TimeNs t, const cv::Mat& image);
-  bool alignToReference(const cv::Mat& image, const SE3* hint, SE3& T_c_ref, double& alpha, double& beta) const;
-  BaStats twoFrameBa(const cv::Mat& image, const SE3& T_c_ref, double alpha, double beta, std::vector<BaFrame>& fr,
-                     std::vector<BaPoint>& pts) const;
+  bool alignToReference(const cv::Mat& image, const SE3* hint, SE3& T_c_ref, double& alpha,
+                        double& beta) const;
+  BaStats twoFrameBa(const cv::Mat& image, const SE3& T_c_ref, double alpha, double beta,
+                     std::vector<BaFrame>& fr, std::vector<BaPoint>& pts) const;
   double translationParallax(const SE3& T_c_ref) const;
 
   CameraModel cam_;
