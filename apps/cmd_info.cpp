@@ -25,8 +25,8 @@ void printText(const Sequence& seq, const SequenceStats& s) {
     std::printf("resolution   unknown (give it with --resolution WxH)\n");
   if (seq.hasCalibration()) {
     const CameraModel& c = seq.camera();
-    std::printf("camera       fx %.3f fy %.3f cx %.3f cy %.3f, distortion %s\n", c.fx, c.fy, c.cx, c.cy,
-                toString(c.distortion));
+    std::printf("camera       fx %.3f fy %.3f cx %.3f cy %.3f, distortion %s (from %s)\n", c.fx, c.fy, c.cx,
+                c.cy, toString(c.distortion), seq.calibrationSource().c_str());
   } else {
     std::printf("camera       no calibration\n");
   }
@@ -74,6 +74,7 @@ void printJson(const Sequence& seq, const SequenceStats& s) {
   j["triggers"] = s.triggers;
   j["ground_truth"] = s.gt_poses;
   j["calibration"] = seq.hasCalibration();
+  if (seq.hasCalibration()) j["calibration_source"] = seq.calibrationSource();
   std::printf("%s\n", j.dump(2).c_str());
 }
 
@@ -92,9 +93,10 @@ void addInfoCommand(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("info", "Print what a sequence or recording holds (format, sizes, counts, spans)");
   auto a = std::make_shared<InfoArgs>();
-  cmd->add_option("path", a->path,
-                  "Sequence folder (ECD layout) or recording: Prophesee .raw, ROS 1 .bag, rosbag2 .db3/.mcap "
-                  "(or its folder), HDF5 events")
+  cmd->add_option(
+         "path", a->path,
+         "Sequence folder (ECD layout) or recording: AEDAT 4.0, Prophesee .raw/.dat, ROS 1 .bag, rosbag2 "
+         ".db3/.mcap (or its folder), HDF5 (DSEC, TUM-VIE, VECtor, MVSEC, M3ED, eds)")
       ->required();
   cmd->add_flag("--json", a->json, "One JSON object (counts as integers, times as integer ns)");
   addRecordingOptions(cmd, a->recording);

@@ -6,6 +6,7 @@
 namespace eds::app {
 
 void addInfoCommand(CLI::App& app);
+void addConvertCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
 void addSimulateCommand(CLI::App& app);
 void addTrackCommand(CLI::App& app);

@@ -5,10 +5,10 @@
 #include <string>
 
 #include "commands.hpp"
-#include "interrupt.hpp"
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/version.hpp"
+#include "interrupt.hpp"
 
 int main(int argc, char** argv) {
   eds::app::installInterruptHandlers();
@@ -19,15 +19,17 @@ int main(int argc, char** argv) {
   std::map<std::string, eds::LogLevel> levels;
   for (const auto& [level, name] : eds::enumNames(eds::LogLevel{})) levels.emplace(name, level);
   std::string level_name = "warn";
-  app.add_option("--log-level", level_name,
-                 "Messages on stderr: error, warn, info or debug (traces the bootstrap, every keyframe's solve "
-                 "and every event frame)")
+  app.add_option(
+         "--log-level", level_name,
+         "Messages on stderr: error, warn, info or debug (traces the bootstrap, every keyframe's solve "
+         "and every event frame)")
       ->check(CLI::IsMember(levels))
       ->capture_default_str()
       ->each([&levels](const std::string& name) { eds::setLogLevel(levels.at(name)); });
   app.fallthrough();
   // Subcommands (one file each under apps/).
   eds::app::addInfoCommand(app);
+  eds::app::addConvertCommand(app);
   eds::app::addEvalCommand(app);
   eds::app::addSimulateCommand(app);
   eds::app::addTrackCommand(app);

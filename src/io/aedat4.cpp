@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cstring>
-#include <system_error>
 #include <opencv2/imgproc.hpp>
+#include <system_error>
 
 #include "io/decompress.hpp"
 #include "io/flatbuffer_view.hpp"
@@ -57,15 +57,16 @@ std::vector<Aedat4Stream> parseStreams(const std::string& xml) {
   return streams;
 }
 
-// DV's IMU samples are tables: timestamp (int64 µs), temperature, accelerometer xyz (g), gyroscope xyz
-// (deg/s), magnetometer xyz (floats).
 // A packet's time in µs as ns; an error naming the packet when it is beyond int64 ns.
 TimeNs packetTimeNs(std::int64_t us, const std::string& file, std::uint64_t packet_offset, const char* what) {
   if (!microsecondsFitNs(us))
-    throw errorAt(file, packet_offset, std::string(what) + " time " + std::to_string(us) + " us is beyond int64 ns");
+    throw errorAt(file, packet_offset,
+                  std::string(what) + " time " + std::to_string(us) + " us is beyond int64 ns");
   return us * kNsPerUs;
 }
 
+// DV's IMU samples are tables: timestamp (int64 µs), temperature, accelerometer xyz (g), gyroscope xyz
+// (deg/s), magnetometer xyz (floats).
 void appendImu(const FlatTable& packet, const std::string& file, std::uint64_t packet_offset,
                std::vector<ImuSample>& out) {
   constexpr double kG = 9.80665, kDegToRad = 3.14159265358979323846 / 180.0;
@@ -77,6 +78,18 @@ void appendImu(const FlatTable& packet, const std::string& file, std::uint64_t p
       s.gyro[k] = imu.scalar<float>(5 + k, 0.0f) * kDegToRad;
     }
     out.push_back(s);
+  }
+}
+
+// DV's Trigger tables: timestamp (int64 µs) 0, type (int8) 1.
+void appendTriggers(const FlatTable& root, const std::string& path, std::uint64_t offset,
+                    std::vector<TriggerEvent>& out) {
+  for (const FlatTable& t : root.tables(0)) {
+    const auto type = t.scalar<std::int8_t>(1, 0);
+    const TimeNs ns = packetTimeNs(t.scalar<std::int64_t>(0, 0), path, offset, "trigger");
+    if (!out.empty() && ns < out.back().t) throw errorAt(path, offset, "trigger times go back");
+    const bool rising = type == 1 || type == 3 || type == 4 || type == 6 || type == 8;
+    out.push_back({ns, static_cast<std::uint8_t>(type), rising});
   }
 }
 
@@ -198,7 +211,8 @@ Aedat4Counts scanAedat4(const std::filesystem::path& file) {
       root.vector(0, kTriggerBytes, n);
       c.triggers += n;
     } else if (p.type == "FRME") {
-      c.frames.push_back({packetTimeNs(root.scalar<std::int64_t>(0, 0), reader.path(), p.offset, "frame"), p.offset});
+      c.frames.push_back(
+          {packetTimeNs(root.scalar<std::int64_t>(0, 0), reader.path(), p.offset, "frame"), p.offset});
     }
   }
   return c;
@@ -244,10 +258,7 @@ bool Aedat4EventSource::decodeNextBlock(EventArray& block) {
   std::size_t n = 0;
   do {
     if (!reader_->next(p)) return false;
-    if (p.type == "TRIG") {
-      FlatTable::root(p.root).vector(0, kTriggerBytes, n);
-      triggers_ += n;
-    }
+    if (p.type == "TRIG") appendTriggers(FlatTable::root(p.root), reader_->path(), p.offset, triggers_);
   } while (p.type != "EVTS");
   const ByteView e = FlatTable::root(p.root).vector(0, kEventBytes, n);
   block.resize(n);

@@ -71,14 +71,16 @@ class Aedat4EventSource : public BlockEventSource {
   ~Aedat4EventSource() override;
   int width() const;
   int height() const;
-  std::size_t triggersRead() const override { return triggers_; }
+  // DV's trigger types as channels (1 external rising, 2 falling, 3 pulse, 6-9 APS frame and exposure
+  // start/end...); rising: an edge up, a pulse, a start.
+  const std::vector<TriggerEvent>& triggers() const override { return triggers_; }
 
  private:
   bool decodeNextBlock(EventArray& block) override;
   std::unique_ptr<Aedat4Reader> reader_;
   int width_ = 0, height_ = 0;
   TimeNs last_t_ = 0;
-  std::size_t triggers_ = 0;
+  std::vector<TriggerEvent> triggers_;
 };
 
 }  // namespace eds

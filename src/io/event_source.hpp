@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <optional>
+#include <vector>
 
 #include "core/events.hpp"
 
@@ -17,8 +18,11 @@ class EventSource {
   virtual std::size_t read(EventArray& out, std::size_t max_events) = 0;
   // Total number of events if known without reading everything (HDF5: yes; text: no).
   virtual std::optional<std::size_t> size() const { return std::nullopt; }
-  // External trigger edges read so far (formats that record them beside the events).
-  virtual std::size_t triggersRead() const { return 0; }
+  // External trigger edges read so far, in time order (formats that record them beside the events).
+  virtual const std::vector<TriggerEvent>& triggers() const { return no_triggers_; }
+
+ private:
+  std::vector<TriggerEvent> no_triggers_;
 };
 
 // A source that decodes its input a block at a time (a chunk of words, a message) and hands the events

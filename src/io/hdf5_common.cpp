@@ -1,6 +1,7 @@
 #include "io/hdf5_common.hpp"
 
 #include <dlfcn.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <array>
@@ -81,6 +82,64 @@ bool loadBlosc() {
     if (void* handle = dlopen(soname, RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE)) dlclose(handle);
   }
   return true;
+}
+
+namespace {
+
+// H5Z filter function: decompresses one chunk (flags has H5Z_FLAG_REVERSE) or compresses it (level
+// cd_values[0], else 3). Returns the new size, 0 on failure (HDF5 then reports the read or write).
+// A frame whose header does not give its size (a streaming compressor wrote it), decoded as a stream.
+std::size_t zstdStreamed(std::size_t nbytes, std::size_t* buf_size, void** buf) {
+  std::vector<char> out(std::max<std::size_t>(4 * nbytes, 1 << 16));
+  ZSTD_DStream* ds = ZSTD_createDStream();
+  ZSTD_inBuffer in{*buf, nbytes, 0};
+  ZSTD_outBuffer o{out.data(), out.size(), 0};
+  std::size_t rc = 0;
+  while ((rc = ZSTD_decompressStream(ds, &o, &in)) != 0 && !ZSTD_isError(rc)) {
+    if (o.pos < o.size) break;  // input used up with the frame unfinished: truncated
+    out.resize(2 * out.size());
+    o = {out.data(), out.size(), o.pos};
+  }
+  ZSTD_freeDStream(ds);
+  void* result = rc == 0 ? H5allocate_memory(std::max<std::size_t>(o.pos, 1), false) : nullptr;
+  if (result == nullptr) return 0;
+  std::copy_n(out.data(), o.pos, static_cast<char*>(result));
+  H5free_memory(*buf);
+  *buf = result;
+  *buf_size = std::max<std::size_t>(o.pos, 1);
+  return o.pos;
+}
+
+std::size_t zstdFilter(unsigned flags, std::size_t cd_nelmts, const unsigned cd_values[], std::size_t nbytes,
+                       std::size_t* buf_size, void** buf) {
+  const bool decompress = (flags & H5Z_FLAG_REVERSE) != 0;
+  const unsigned long long frame = decompress ? ZSTD_getFrameContentSize(*buf, nbytes) : 0;
+  if (decompress && frame == ZSTD_CONTENTSIZE_UNKNOWN) return zstdStreamed(nbytes, buf_size, buf);
+  if (decompress && frame == ZSTD_CONTENTSIZE_ERROR) return 0;
+  const std::size_t capacity = decompress ? static_cast<std::size_t>(frame) : ZSTD_compressBound(nbytes);
+  void* out = H5allocate_memory(std::max<std::size_t>(capacity, 1), false);
+  if (out == nullptr) return 0;
+  const std::size_t n = decompress ? ZSTD_decompress(out, capacity, *buf, nbytes)
+                                   : ZSTD_compress(out, capacity, *buf, nbytes,
+                                                   cd_nelmts > 0 ? static_cast<int>(cd_values[0]) : 3);
+  if (ZSTD_isError(n) || (decompress && n != capacity)) {
+    H5free_memory(out);
+    return 0;
+  }
+  H5free_memory(*buf);
+  *buf = out;
+  *buf_size = capacity;
+  return n;
+}
+
+}  // namespace
+
+void registerZstdFilter() {
+  addPluginPath();
+  if (H5Zfilter_avail(kZstdFilter) > 0) return;
+  static const H5Z_class2_t kClass = {H5Z_CLASS_T_VERS, kZstdFilter, 1,       1,
+                                      "zstd (eds)",     nullptr,     nullptr, &zstdFilter};
+  H5Zregister(&kClass);
 }
 
 }  // namespace eds::hdf5

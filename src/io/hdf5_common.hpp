@@ -55,7 +55,8 @@ class QuietHdf5 {
 // The outermost and innermost messages of HDF5's error stack: what failed and why.
 std::string lastHdf5Error();
 
-constexpr H5Z_filter_t kBloscFilter = 32001;  // id registered with The HDF Group
+constexpr H5Z_filter_t kBloscFilter = 32001;  // ids registered with The HDF Group
+constexpr H5Z_filter_t kZstdFilter = 32015;
 
 [[noreturn]] void failH5(const std::string& file, const std::string& what);
 
@@ -63,6 +64,9 @@ std::int64_t floorDiv(std::int64_t a, std::int64_t b);
 
 // Adds Debian's filter plugin folder to HDF5's search path unless HDF5_PLUGIN_PATH is set.
 void addPluginPath();
+// Makes the Zstandard filter (VECtor's files use it) available: Debian packages no HDF5 plugin for
+// it, so eds registers its own, on libzstd, unless a plugin already provides it.
+void registerZstdFilter();
 // Loads the blosc filter (adding Debian's plugin folder to HDF5's search path if needed).
 bool loadBlosc();
 

@@ -6,6 +6,7 @@
 #include <array>
 #include <filesystem>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -72,6 +73,7 @@ Hid openDataset(hid_t file, const std::string& path, const char* name, std::size
     char filter_name[64] = {};
     const H5Z_filter_t id = H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &nvalues, nullptr,
                                            sizeof filter_name, filter_name, &config);
+    if (id == hdf5::kZstdFilter) hdf5::registerZstdFilter();
     if (id < 0 || (id == kBloscFilter ? !loadBlosc() : H5Zfilter_avail(id) <= 0)) {
       throw InputError(path, full + " needs HDF5 filter " + std::to_string(id) + " ('" + filter_name +
                                  "'), which cannot be loaded" +
@@ -106,8 +108,9 @@ struct Hdf5EventSource::Impl {
   std::size_t ms_count = 0;
   std::size_t n = 0;
   std::size_t pos = 0;
-  std::int64_t t_offset_us = 0;
-  std::int64_t prev_t_us = 0;  // last value read, for the ordering check across reads
+  std::int64_t t_offset = 0;  // in ticks of events/t
+  std::int64_t tick_ns = 1000;
+  std::int64_t prev_t = 0;  // last value read, for the ordering check across reads
   bool has_prev = false;
   bool p_unsigned = true;  // p read as raw uint8 bytes: only 0/1 are valid
   bool overflow = false;   // set by abortOnOverflow
@@ -147,10 +150,12 @@ struct Hdf5EventSource::Impl {
     return static_cast<std::size_t>(v);
   }
 
-  TimeNs toNs(std::int64_t t_us) const {
+  const char* unit() const { return tick_ns == 1 ? " ns" : " us"; }
+
+  TimeNs toNs(std::int64_t t) const {
     TimeNs sum = 0, ns = 0;
-    if (__builtin_add_overflow(t_us, t_offset_us, &sum) || __builtin_mul_overflow(sum, 1000, &ns)) {
-      throw InputError(path, "events/t = " + std::to_string(t_us) + " + t_offset overflows int64 ns");
+    if (__builtin_add_overflow(t, t_offset, &sum) || __builtin_mul_overflow(sum, tick_ns, &ns)) {
+      throw InputError(path, "events/t = " + std::to_string(t) + " + t_offset overflows int64 ns");
     }
     return ns;
   }
@@ -164,25 +169,26 @@ struct Hdf5EventSource::Impl {
     // x86-64, so a second pass over t would cost as much again. Unsigned arithmetic keeps a
     // wrap-around defined; it is ruled out below from the first and last values.
     const std::int64_t first = t[0];
-    std::int64_t last = has_prev ? prev_t_us : first;
-    const auto uoff = static_cast<std::uint64_t>(t_offset_us);
+    std::int64_t last = has_prev ? prev_t : first;
+    const auto uoff = static_cast<std::uint64_t>(t_offset);
+    const auto utick = static_cast<std::uint64_t>(tick_ns);
     unsigned bad = 0;
     for (std::size_t i = 0; i < count; ++i) {
       const std::int64_t v = t[i];
       bad |= v < last;
       last = v;
-      t[i] = static_cast<std::int64_t>((static_cast<std::uint64_t>(v) + uoff) * 1000U);
+      t[i] = static_cast<std::int64_t>((static_cast<std::uint64_t>(v) + uoff) * utick);
     }
     if (bad) reportOrder(t, count);  // t is overwritten: it re-reads the block from the file
-    // Sorted, so the first and last values bound all: (t + offset) * 1000 must fit int64.
-    constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max() / 1000;
+    // Sorted, so the first and last values bound all: (t + offset) * tick must fit int64.
+    const std::int64_t kMax = std::numeric_limits<std::int64_t>::max() / tick_ns;
     std::int64_t lo = 0, hi = 0;
-    if (__builtin_add_overflow(first, t_offset_us, &lo) || __builtin_add_overflow(last, t_offset_us, &hi) ||
+    if (__builtin_add_overflow(first, t_offset, &lo) || __builtin_add_overflow(last, t_offset, &hi) ||
         lo < -kMax || hi > kMax) {
       throw InputError(path, "events/t[" + std::to_string(pos) + ".." + std::to_string(pos + count) +
                                  ") + t_offset overflows int64 ns");
     }
-    prev_t_us = last;
+    prev_t = last;
     has_prev = true;
 
     if (options.width > 0) checkPixels(out.x.data() + old, count, options.width, kX);
@@ -209,12 +215,12 @@ struct Hdf5EventSource::Impl {
 
   [[noreturn]] void reportOrder(std::int64_t* t, std::size_t count) {
     readRange(kT, H5T_NATIVE_INT64, t, pos, count);
-    std::size_t i = (has_prev && t[0] < prev_t_us) ? 0 : 1;
+    std::size_t i = (has_prev && t[0] < prev_t) ? 0 : 1;
     while (i < count && t[i] >= t[i - 1]) ++i;
-    const std::int64_t before = i == 0 ? prev_t_us : t[i - 1];
-    throw InputError(path, "events/t[" + std::to_string(pos + i) + "] = " + std::to_string(t[i]) +
-                               " us is before the previous event (" + std::to_string(before) +
-                               " us): timestamps must not decrease");
+    const std::int64_t before = i == 0 ? prev_t : t[i - 1];
+    throw InputError(path, "events/t[" + std::to_string(pos + i) + "] = " + std::to_string(t[i]) + unit() +
+                               " is before the previous event (" + std::to_string(before) + unit() +
+                               "): timestamps must not decrease");
   }
 
   void checkPixels(const std::uint16_t* v, std::size_t count, int limit, Field f) const {
@@ -236,6 +242,9 @@ Hdf5EventSource::Hdf5EventSource(const std::string& path, Hdf5EventOptions optio
   Impl& m = *impl_;
   m.path = path;
   m.options = options;
+  m.tick_ns = options.tick_ns;
+  if (m.tick_ns <= 0 || 1'000'000 % m.tick_ns != 0)
+    throw std::invalid_argument("Hdf5EventSource: tick_ns must divide a millisecond");
   QuietHdf5 quiet;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "file does not exist");
@@ -276,7 +285,7 @@ Hdf5EventSource::Hdf5EventSource(const std::string& path, Hdf5EventOptions optio
     std::size_t len = 0;
     Hid ds = openDataset(m.file.get(), path, "t_offset", &len);
     if (len != 1) throw InputError(path, "t_offset has " + std::to_string(len) + " values, not 1");
-    if (H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, m.dxpl.get(), &m.t_offset_us) < 0) {
+    if (H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, m.dxpl.get(), &m.t_offset) < 0) {
       failH5(path, "cannot read t_offset");
     }
   }
@@ -313,8 +322,9 @@ std::size_t Hdf5EventSource::read(EventArray& out, std::size_t max_events) {
 }
 
 std::optional<std::size_t> Hdf5EventSource::size() const { return impl_->n; }
+const std::vector<TriggerEvent>& Hdf5EventSource::triggers() const { return impl_->options.triggers; }
 std::size_t Hdf5EventSource::position() const { return impl_->pos; }
-TimeNs Hdf5EventSource::tOffsetNs() const { return impl_->t_offset_us * 1000; }
+TimeNs Hdf5EventSource::tOffsetNs() const { return impl_->t_offset * impl_->tick_ns; }
 bool Hdf5EventSource::hasMsToIdx() const { return impl_->ms_to_idx.valid(); }
 const std::string& Hdf5EventSource::path() const { return impl_->path; }
 
@@ -336,27 +346,28 @@ void Hdf5EventSource::seekIndex(std::size_t index) {
 void Hdf5EventSource::seek(TimeNs t_ns) {
   Impl& m = *impl_;
   QuietHdf5 quiet;
-  // First event with (t + offset) * 1000 >= t_ns, i.e. t >= ceil(t_ns / 1000) - offset (division
+  // First event with (t + offset) * tick >= t_ns, i.e. t >= ceil(t_ns / tick) - offset (division
   // truncates toward zero, which is the ceiling for negative values). Saturates far out of range.
   std::int64_t target = 0;
-  if (__builtin_sub_overflow(t_ns / 1000 + (t_ns % 1000 > 0), m.t_offset_us, &target)) {
-    target = m.t_offset_us < 0 ? std::numeric_limits<std::int64_t>::max()
-                               : std::numeric_limits<std::int64_t>::min();
+  if (__builtin_sub_overflow(t_ns / m.tick_ns + (t_ns % m.tick_ns > 0), m.t_offset, &target)) {
+    target =
+        m.t_offset < 0 ? std::numeric_limits<std::int64_t>::max() : std::numeric_limits<std::int64_t>::min();
   }
   std::size_t lo = 0, hi = m.n;
+  const std::int64_t ticks_per_ms = 1'000'000 / m.tick_ns;
   if (m.ms_to_idx.valid()) {
     // ms_to_idx[i] <= answer <= ms_to_idx[i + 1] for target in [i ms, (i + 1) ms).
     if (target < 0) {
       hi = m.msToIdx(0);
-    } else if (static_cast<std::uint64_t>(target / 1000) + 1 < m.ms_count) {
-      const auto i = static_cast<std::size_t>(target / 1000);
+    } else if (static_cast<std::uint64_t>(target / ticks_per_ms) + 1 < m.ms_count) {
+      const auto i = static_cast<std::size_t>(target / ticks_per_ms);
       lo = m.msToIdx(i);
       hi = m.msToIdx(i + 1);
     } else {
       lo = m.msToIdx(m.ms_count - 1);
     }
     if (lo > hi) {
-      throw InputError(m.path, "ms_to_idx decreases near " + std::to_string(target / 1000) + " ms");
+      throw InputError(m.path, "ms_to_idx decreases near " + std::to_string(target / ticks_per_ms) + " ms");
     }
   }
   // Probes narrow [lo, hi] down to a block that one read brings in: every HDF5 read has a fixed

@@ -1,7 +1,8 @@
 #pragma once
 // Events in HDF5 files with the DSEC / EDS-dataset layout:
 //   events/x, events/y (pixel), events/t (microseconds, relative to t_offset), events/p (0/1),
-//   optional ms_to_idx (ms_to_idx[i] = first event with t >= i*1000 µs) and t_offset (µs, scalar).
+//   optional ms_to_idx (ms_to_idx[i] = first event with t >= i ms) and t_offset (µs, scalar).
+// eds's own layout (eds_hdf5.hpp) is the same with t in nanoseconds.
 // Any integer storage type is accepted for each field; HDF5 converts to the memory type and a value
 // that does not fit is reported instead of being clipped silently.
 #include <cstddef>
@@ -9,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/events.hpp"
 #include "core/time.hpp"
@@ -24,6 +26,11 @@ struct Hdf5EventOptions {
   // "ms_to_idx"; M3ED "prophesee/left" and "prophesee/left/ms_map_idx".
   std::string group = "events";
   std::string ms_index = "ms_to_idx";
+  // Nanoseconds per unit of t (and t_offset): 1000 for µs (DSEC, TUM-VIE, M3ED), 1 for ns (eds's own
+  // layout, which keeps simulated and converted times exactly). 1, 10, 100, 1000...
+  std::int64_t tick_ns = 1000;
+  // Trigger edges recorded beside the events (eds's layout keeps them in a dataset of their own).
+  std::vector<TriggerEvent> triggers;
 };
 
 class Hdf5EventSource : public EventSource {
@@ -37,6 +44,7 @@ class Hdf5EventSource : public EventSource {
 
   std::size_t read(EventArray& out, std::size_t max_events) override;
   std::optional<std::size_t> size() const override;
+  const std::vector<TriggerEvent>& triggers() const override;
 
   // Positions the stream at the first event with t >= t_ns (the end if there is none). With
   // ms_to_idx the search is narrowed to one millisecond; without it, a binary search over events/t.

@@ -16,6 +16,7 @@ constexpr hsize_t kBlockRows = 1 << 16;
 
 Hid openFile(const std::string& path) {
   hdf5::QuietHdf5 quiet;
+  hdf5::registerZstdFilter();  // frames and events may be zstd-compressed
   Hid f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!f.valid()) hdf5::failH5(path, "cannot open as HDF5");
   return f;
@@ -59,6 +60,7 @@ Hdf5Layout detectHdf5Layout(const std::filesystem::path& file) {
       if (H5Lexists(f.get(), g, H5P_DEFAULT) <= 0) return false;
     return true;
   };
+  if (H5Aexists(f.get(), "eds_layout") > 0) return Hdf5Layout::kEds;
   if (has({"davis", "davis/left", "davis/left/events"})) return Hdf5Layout::kMvsec;
   if (has({"prophesee", "prophesee/left", "prophesee/left/t"})) return Hdf5Layout::kM3ed;
   if (has({"events", "events/t"})) return Hdf5Layout::kDsec;
@@ -66,8 +68,9 @@ Hdf5Layout detectHdf5Layout(const std::filesystem::path& file) {
 }
 
 Hdf5FrameDatasets frameDatasets(Hdf5Layout layout) {
-  if (layout == Hdf5Layout::kMvsec) return {"davis/left/image_raw", "davis/left/image_raw_ts", true};
-  if (layout == Hdf5Layout::kM3ed) return {"ovc/left/data", "ovc/ts", false};
+  if (layout == Hdf5Layout::kMvsec) return {"davis/left/image_raw", "davis/left/image_raw_ts", 0};
+  if (layout == Hdf5Layout::kM3ed) return {"ovc/left/data", "ovc/ts", 1000};
+  if (layout == Hdf5Layout::kEds) return {"frames/images", "frames/t", 1};
   return {};
 }
 
@@ -106,15 +109,18 @@ Hdf5FrameIndex readHdf5FrameIndex(const std::filesystem::path& file, const Hdf5F
     throw InputError(path, where.times + " has " + std::to_string(ts_dims[0]) + " times for " +
                                std::to_string(dims[0]) + " images");
   std::vector<double> seconds(ts_dims[0]);
-  std::vector<std::int64_t> micros(ts_dims[0]);
+  std::vector<std::int64_t> ticks(ts_dims[0]);
+  const bool in_seconds = where.tick_ns == 0;
   if (ts_dims[0] > 0)
     readRows(ts.get(), path, where.times, 1, ts_dims, 0, ts_dims[0],
-             where.times_in_seconds ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64,
-             where.times_in_seconds ? static_cast<void*>(seconds.data()) : static_cast<void*>(micros.data()));
+             in_seconds ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64,
+             in_seconds ? static_cast<void*>(seconds.data()) : static_cast<void*>(ticks.data()));
   for (std::size_t i = 0; i < ts_dims[0]; ++i) {
-    if (where.times_in_seconds && !std::isfinite(seconds[i]))
-      throw InputError(path, where.times + "[" + std::to_string(i) + "] is not finite");
-    frames.t.push_back(where.times_in_seconds ? fromSeconds(seconds[i]) : micros[i] * 1000);
+    TimeNs t = 0;
+    if (in_seconds ? !std::isfinite(seconds[i]) : __builtin_mul_overflow(ticks[i], where.tick_ns, &t))
+      throw InputError(path,
+                       where.times + "[" + std::to_string(i) + "] is not a time (not finite or too large)");
+    frames.t.push_back(in_seconds ? fromSeconds(seconds[i]) : t);
     if (i > 0 && frames.t[i] <= frames.t[i - 1])
       throw InputError(path, where.times + "[" + std::to_string(i) + "]: times must increase");
   }

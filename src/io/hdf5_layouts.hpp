@@ -18,14 +18,14 @@
 
 namespace eds {
 
-enum class Hdf5Layout { kNone, kDsec, kMvsec, kM3ed };
+enum class Hdf5Layout { kNone, kDsec, kMvsec, kM3ed, kEds };
 // Which layout an HDF5 file has, by the datasets in it (left camera).
 Hdf5Layout detectHdf5Layout(const std::filesystem::path& file);
 
 // Where a layout keeps its frames.
 struct Hdf5FrameDatasets {
   std::string images, times;
-  bool times_in_seconds = true;  // float64 seconds (MVSEC), else integer µs (M3ED)
+  std::int64_t tick_ns = 0;  // 0: float64 seconds (MVSEC), else integers in these units (M3ED µs: 1000)
 };
 Hdf5FrameDatasets frameDatasets(Hdf5Layout layout);
 

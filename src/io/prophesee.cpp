@@ -122,6 +122,20 @@ void Evt2Decoder::decode(const std::uint32_t* words, std::size_t n, EventArray& 
   }
 }
 
+void DatDecoder::decode(const std::uint8_t* records, std::size_t n, EventArray& cd) {
+  const std::size_t first = cd.size();
+  cd.resize(first + n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t r[2];
+    std::memcpy(r, records + 8 * i, 8);
+    if (r[0] + (std::uint64_t{1} << 31) < last_) ++wraps_;  // far below the last time: the counter wrapped
+    last_ = r[0];
+    cd.t[first + i] = static_cast<TimeNs>(((wraps_ << 32) | r[0]) * kNsPerUs);
+    cd.x[first + i] = static_cast<std::uint16_t>(r[1] & 0x3FFF);
+    cd.y[first + i] = static_cast<std::uint16_t>((r[1] >> 14) & 0x3FFF);
+    cd.p[first + i] = (r[1] >> 28) & 1 ? 1 : -1;
+  }
+}
 
 namespace {
 
@@ -140,12 +154,24 @@ void parseFormatKey(const std::string& value, PropheseeHeader& h, bool& have_for
   }
 }
 
+// After a .dat header: the event type (0: 2D, 12: CD) and the record size, which must be 8.
+void readDatTypeAndSize(BinaryFile& in, PropheseeHeader& h) {
+  const std::uint64_t at = in.offset();
+  std::uint8_t type_size[2];
+  in.readExact(type_size, 2, ".dat event type and size");
+  if ((type_size[0] != 0 && type_size[0] != 12) || type_size[1] != 8)
+    throw errorAt(in.path(), at,
+                  ".dat event type " + std::to_string(type_size[0]) + " of " + std::to_string(type_size[1]) +
+                      " bytes is not read (CD events, type 0 or 12, of 8 bytes are)");
+  h.format = EvtFormat::kDat;
+}
+
 }  // namespace
 
 PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
   BinaryFile in(file);
   PropheseeHeader h;
-  bool have_format = false;
+  bool have_format = false, dat_header = false;
   std::string line, plugin;
   std::size_t line_no = 0;
   while (!in.atEnd()) {
@@ -173,10 +199,14 @@ PropheseeHeader readPropheseeHeader(const std::filesystem::path& file) {
       std::sscanf(value.c_str(), "%dx%d", &h.width, &h.height);
     } else if (key == "plugin_name") {
       plugin = value;
+    } else if (key == "Height" || key == "Width") {  // .dat headers
+      (key == "Height" ? h.height : h.width) = std::atoi(value.c_str());
+      dat_header = true;
     }
   }
   if (line_no == 0) throw InputError(file.string(), "not a Prophesee .raw file (no '% ' header)");
-  if (!have_format)
+  if (!have_format && dat_header) readDatTypeAndSize(in, h);
+  if (!have_format && !dat_header)
     throw InputError(file.string(), "header names no event encoding ('% evt 3.0' or '% format EVT3')");
   if (h.width <= 0 || h.height <= 0) {
     h.width = h.height = 0;
@@ -196,6 +226,7 @@ struct PropheseeRawSource::Impl {
   PropheseeHeader header;
   Evt2Decoder evt2;
   Evt3Decoder evt3;
+  DatDecoder dat;
   std::vector<std::uint8_t> block;
   std::vector<TriggerEvent> triggers;
   TimeOrder order;
@@ -211,7 +242,7 @@ struct PropheseeRawSource::Impl {
   // Decodes the next block of words into `pending`; false at the end of the file.
   bool refill(EventArray& pending) {
     constexpr std::size_t kBlockBytes = 1 << 20;
-    const std::size_t word = header.format == EvtFormat::kEvt3 ? 2 : 4;
+    const std::size_t word = header.format == EvtFormat::kEvt3 ? 2 : header.format == EvtFormat::kDat ? 8 : 4;
     const std::uint64_t offset = file.offset();
     block.resize(kBlockBytes);
     const std::size_t read = file.readSome(block.data(), kBlockBytes);
@@ -220,7 +251,9 @@ struct PropheseeRawSource::Impl {
     if (got == 0) return false;
     file.seek(offset + got);  // a partial trailing word is left for the next block (or dropped at the end)
     try {
-      if (header.format == EvtFormat::kEvt3)
+      if (header.format == EvtFormat::kDat)
+        dat.decode(block.data(), got / 8, pending);
+      else if (header.format == EvtFormat::kEvt3)
         evt3.decode(reinterpret_cast<const std::uint16_t*>(block.data()), got / 2, pending, triggers);
       else
         evt2.decode(reinterpret_cast<const std::uint32_t*>(block.data()), got / 4, pending, triggers);

@@ -1,7 +1,8 @@
 #pragma once
 // Prophesee event streams: the EVT 2.0 (32-bit words) and EVT 3.0 (16-bit vectorized words) encodings,
 // as written to `.raw` files by Metavision (a text header of `% key value` lines, then the words) and
-// carried in ROS `event_camera_msgs/EventPacket` messages (encoding "evt3").
+// carried in ROS `event_camera_msgs/EventPacket` messages (encoding "evt3"); and the older `.dat` CD
+// files (a `% ` header, a type and a size byte, then 8-byte records).
 // Times are the sensor's microseconds, converted to ns; EVT 3.0's 24-bit time wraps every 16.8 s and
 // is unwrapped here.
 #include <cstdint>
@@ -16,7 +17,7 @@
 
 namespace eds {
 
-enum class EvtFormat { kEvt2, kEvt3 };
+enum class EvtFormat { kEvt2, kEvt3, kDat };
 
 // A word of a type the encoding does not define, at index `word` of the decoded block.
 struct EvtWordError {
@@ -50,6 +51,17 @@ class Evt2Decoder {
  private:
   std::uint64_t time_high_ = 0;  // the time's bits 6..33
   bool have_time_ = false;
+};
+
+// Decodes the 8-byte CD records of a Prophesee .dat file: uint32 time in µs (it wraps every 71.6 min and
+// is unwrapped here), then uint32 x (bits 0-13), y (bits 14-27), polarity (bit 28).
+class DatDecoder {
+ public:
+  void decode(const std::uint8_t* records, std::size_t n, EventArray& cd);
+
+ private:
+  std::uint64_t wraps_ = 0;
+  std::uint32_t last_ = 0;
 };
 
 // Makes a nearly ordered stream ordered: a time a little before the latest one (the sensor's own
@@ -90,8 +102,7 @@ class PropheseeRawSource : public BlockEventSource {
 
   const PropheseeHeader& header() const;
   // External trigger edges decoded so far (they come with the events, in time order).
-  const std::vector<TriggerEvent>& triggers() const;
-  std::size_t triggersRead() const override { return triggers().size(); }
+  const std::vector<TriggerEvent>& triggers() const override;
   // Events so far whose time, slightly before an earlier event's, was raised to it (TimeOrder).
   std::uint64_t raisedTimes() const;
 

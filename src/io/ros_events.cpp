@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 
+#include "io/libcaer_payload.hpp"
 #include "io/prophesee.hpp"
 
 namespace eds {
@@ -107,8 +109,13 @@ struct RosEventSource::Impl {
     const EventPacketMsg p = readEventPacket(r);
     stats.width = p.width;
     stats.height = p.height;
-    if (p.encoding != "evt3") throw error("event encoding '" + p.encoding + "' is not read (evt3 is)");
-    if (p.big_endian) throw error("big-endian evt3 payload");
+    if (p.big_endian) throw error("big-endian " + p.encoding + " payload");
+    if (p.encoding == "libcaer" || p.encoding == "libcaer_cmp") {
+      decodeLibcaerPacket(p, pending);
+      return;
+    }
+    if (p.encoding != "evt3")
+      throw error("event encoding '" + p.encoding + "' is not read (evt3, libcaer and libcaer_cmp are)");
     if (p.events.size() % 2 != 0) throw error("evt3 payload of an odd number of bytes");
     const std::size_t first_trigger = stats.triggers.size();
     words.resize(p.events.size() / 2);
@@ -125,6 +132,21 @@ struct RosEventSource::Impl {
     for (TimeNs& t : pending.t) t += stats.sensor_offset;
     for (std::size_t i = first_trigger; i < stats.triggers.size(); ++i)
       stats.triggers[i].t += stats.sensor_offset;
+  }
+
+  // libcaer payloads carry their absolute time: time_base is the ROS clock's ns at the packet's base.
+  void decodeLibcaerPacket(const EventPacketMsg& p, EventArray& pending) const {
+    if (p.time_base > static_cast<std::uint64_t>(std::numeric_limits<TimeNs>::max() / 2))
+      throw error("time_base " + std::to_string(p.time_base) + " ns is beyond int64 ns");
+    const auto base = static_cast<TimeNs>(p.time_base);
+    try {
+      if (p.encoding == "libcaer")
+        decodeLibcaer(p.events.data(), p.events.size(), base, pending);
+      else
+        decodeLibcaerCompressed(p.events.data(), p.events.size(), base, pending);
+    } catch (const PayloadError& e) {
+      throw error(std::string(e.what()) + " (payload byte " + std::to_string(e.byte) + ")");
+    }
   }
 
   void checkPixels(const EventArray& pending) const {

@@ -37,7 +37,7 @@ class RosEventSource : public BlockEventSource {
   const RosTopic& topic() const;
   const char* bagFormat() const;
   const RosEventStats& stats() const;
-  std::size_t triggersRead() const override { return stats().triggers.size(); }
+  const std::vector<TriggerEvent>& triggers() const override { return stats().triggers; }
 
  private:
   bool decodeNextBlock(EventArray& block) override;

@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "io/aedat4.hpp"
 #include "io/ecd_events.hpp"
+#include "io/eds_hdf5.hpp"
 #include "io/hdf5_events.hpp"
 #include "io/hdf5_layouts.hpp"
 #include "io/kalibr.hpp"
@@ -141,12 +142,16 @@ Sequence::Sequence(const fs::path& dir, const SequenceOptions& options) : dir_(d
   for (const char* name : {"camchain.yaml", "calib.yaml"}) {
     if (fs::is_regular_file(dir / name, ec)) {
       camera_ = cameraFromKalibr(readKalibrCamera((dir / name).string()), (dir / name).string());
+      calibration_source_ = (dir / name).string();
       width_ = camera_->width;
       height_ = camera_->height;
       break;
     }
   }
-  if (!camera_ && fs::is_regular_file(dir / "calib.txt", ec)) camera_ = readEcdCalib(dir / "calib.txt");
+  if (!camera_ && fs::is_regular_file(dir / "calib.txt", ec)) {
+    camera_ = readEcdCalib(dir / "calib.txt");
+    calibration_source_ = (dir / "calib.txt").string();
+  }
   if (!frames_.empty() && width_ == 0) {
     // ECD calib.txt has no resolution: the images give it.
     const cv::Mat first = loadFrame(0);
@@ -169,6 +174,7 @@ void Sequence::setCamera(const CameraModel& camera, const std::string& source) {
                                 std::to_string(camera.height) + " but the sequence's images are " +
                                 std::to_string(width_) + "x" + std::to_string(height_));
   camera_ = camera;
+  calibration_source_ = source;
   if (width_ > 0)
     camera_->width = width_, camera_->height = height_;
   else
@@ -255,7 +261,9 @@ void Sequence::openRecordingFile(const fs::path& file) {
   if (file_format == FileFormat::kPropheseeRaw) {
     const PropheseeHeader h = readPropheseeHeader(file);
     event_storage_ = EventStorage::kPropheseeRaw;
-    format_ = h.format == EvtFormat::kEvt3 ? "Prophesee EVT 3.0" : "Prophesee EVT 2.0";
+    format_ = h.format == EvtFormat::kEvt3   ? "Prophesee EVT 3.0"
+              : h.format == EvtFormat::kEvt2 ? "Prophesee EVT 2.0"
+                                             : "Prophesee DAT (CD events)";
     width_ = options_.width > 0 ? options_.width : h.width;
     height_ = options_.height > 0 ? options_.height : h.height;
     return;
@@ -265,6 +273,10 @@ void Sequence::openRecordingFile(const fs::path& file) {
     return;
   }
   const Hdf5Layout layout = file_format == FileFormat::kHdf5 ? detectHdf5Layout(file) : Hdf5Layout::kNone;
+  if (layout == Hdf5Layout::kEds) {
+    openEdsHdf5(file);
+    return;
+  }
   if (layout == Hdf5Layout::kMvsec || layout == Hdf5Layout::kM3ed) {
     event_storage_ = layout == Hdf5Layout::kMvsec ? EventStorage::kHdf5Mvsec : EventStorage::kHdf5;
     format_ =
@@ -322,12 +334,40 @@ void Sequence::openRosRecording(const fs::path& file) {
   }
   if (idx.camera) {
     camera_ = idx.camera;
+    calibration_source_ = "CameraInfo on " + idx.camera_info_topic;
     if (width_ > 0 && (camera_->width != width_ || camera_->height != height_))
       throw InputError(file.string(), "CameraInfo on " + idx.camera_info_topic + " is " +
                                           std::to_string(camera_->width) + "x" +
                                           std::to_string(camera_->height) + ", the sensor " +
                                           std::to_string(width_) + "x" + std::to_string(height_));
   }
+}
+
+void Sequence::openEdsHdf5(const fs::path& file) {
+  EdsHdf5Contents c = readEdsHdf5(file);
+  event_storage_ = EventStorage::kHdf5Eds;
+  format_ = "eds HDF5" + (c.source_format.empty() ? std::string() : " (from " + c.source_format + ")");
+  hdf5_frames_ = frameDatasets(Hdf5Layout::kEds);
+  const Hdf5FrameIndex frames = readHdf5FrameIndex(file, hdf5_frames_);
+  for (std::size_t i = 0; i < frames.t.size(); ++i) frames_.push_back({frames.t[i], file, i});
+  width_ = c.width > 0 ? c.width : options_.width;
+  height_ = c.height > 0 ? c.height : options_.height;
+  const auto mismatch = [&](const char* what, int w, int h) {
+    if (w > 0 && width_ > 0 && (w != width_ || h != height_))
+      throw InputError(file.string(), std::string(what) + " of " + std::to_string(w) + "x" +
+                                          std::to_string(h) + " on a " + std::to_string(width_) + "x" +
+                                          std::to_string(height_) + " sensor");
+  };
+  mismatch("frames", frames.width, frames.height);
+  if (c.camera) mismatch("calibration", c.camera->width, c.camera->height);
+  if (width_ == 0) width_ = frames.width > 0 ? frames.width : c.camera ? c.camera->width : 0;
+  if (height_ == 0) height_ = frames.height > 0 ? frames.height : c.camera ? c.camera->height : 0;
+  camera_ = c.camera;
+  calibration_source_ = c.calibration_source;
+  recorded_gt_ = std::move(c.ground_truth);
+  imu_ = std::move(c.imu);
+  recorded_triggers_ = std::move(c.triggers);
+  if (!c.has_events) events_file_.clear();
 }
 
 fs::path Sequence::framesSource() const {
@@ -345,10 +385,14 @@ std::unique_ptr<EventSource> Sequence::openEvents() const {
   if (event_storage_ == EventStorage::kAedat4) return std::make_unique<Aedat4EventSource>(events_file_);
   if (event_storage_ == EventStorage::kHdf5Mvsec)
     return std::make_unique<MvsecEventSource>(events_file_, width_, height_);
-  if (event_storage_ == EventStorage::kHdf5) {
+  if (event_storage_ == EventStorage::kHdf5 || event_storage_ == EventStorage::kHdf5Eds) {
     Hdf5EventOptions opts;
     opts.width = width_;
     opts.height = height_;
+    if (event_storage_ == EventStorage::kHdf5Eds) {
+      opts.tick_ns = 1;
+      opts.triggers = recorded_triggers_;
+    }
     if (!hdf5_group_.empty()) {
       opts.group = hdf5_group_;
       opts.ms_index = hdf5_group_ + "/ms_map_idx";

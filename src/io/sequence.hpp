@@ -9,7 +9,8 @@
 // "missing" only when the requested work needs it.
 // A sequence can also be one recording file, told by its content: an AEDAT 4.0 file (events, frames,
 // IMU), a Prophesee EVT 2.0/3.0 `.raw` file, a ROS 1 bag, a rosbag2 (`.db3`, `.mcap`, or its folder)
-// an HDF5 event file (DSEC / TUM-VIE layout) or an MVSEC or M3ED HDF5 file (events and frames). Bags also
+// an HDF5 event file (DSEC / TUM-VIE / VECtor layout), an MVSEC or M3ED HDF5 file (events and frames)
+// or eds's own HDF5 layout (everything, written by `eds convert`). Bags also
 // give frames (sensor_msgs/Image), calibration (sensor_msgs/CameraInfo) and ground truth (PoseStamped /
 // TransformStamped); --calib overrides.
 #include <cstdint>
@@ -34,7 +35,7 @@ struct FrameRef {
 };
 
 // How the events of a sequence are stored.
-enum class EventStorage { kNone, kEcdText, kHdf5, kHdf5Mvsec, kPropheseeRaw, kRosBag, kAedat4 };
+enum class EventStorage { kNone, kEcdText, kHdf5, kHdf5Mvsec, kHdf5Eds, kPropheseeRaw, kRosBag, kAedat4 };
 
 struct SequenceOptions {
   std::string events_topic;   // bags: the topic to read events from (empty: the only event topic)
@@ -59,6 +60,8 @@ class Sequence {
   bool hasFrames() const { return !frames_.empty(); }
   bool hasGroundTruth() const;
   bool hasCalibration() const { return camera_.has_value(); }
+  // Where the calibration came from: a file, a bag topic, --calib...
+  const std::string& calibrationSource() const { return calibration_source_; }
   std::uint64_t imuSamples() const { return imu_.size(); }
   // The recorded IMU samples (AEDAT 4.0, bags), in time order; not used by the odometry yet.
   const std::vector<ImuSample>& imu() const { return imu_; }
@@ -85,6 +88,7 @@ class Sequence {
  private:
   void openRecordingFile(const std::filesystem::path& file);
   void openRosRecording(const std::filesystem::path& file);
+  void openEdsHdf5(const std::filesystem::path& file);
 
   std::filesystem::path dir_;
   SequenceOptions options_;
@@ -93,6 +97,8 @@ class Sequence {
   std::filesystem::path events_file_;
   std::vector<FrameRef> frames_;
   std::optional<CameraModel> camera_;
+  std::string calibration_source_;
+  std::vector<TriggerEvent> recorded_triggers_;  // eds HDF5 files keep them apart from the events
   int width_ = 0, height_ = 0;
   std::vector<ImuSample> imu_;
   Hdf5FrameDatasets hdf5_frames_;  // where an HDF5 recording keeps its frames (images empty: none)

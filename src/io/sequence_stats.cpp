@@ -23,7 +23,7 @@ SequenceStats computeStats(const Sequence& seq) {
         const TimeNs t = chunk.t[i];
         if (window_start < 0 || t >= window_start + s.peak_window_ns) {
           peak = std::max(peak, in_window);
-          s.triggers = src->triggersRead();
+          s.triggers = src->triggers().size();
           window_start =
               window_start < 0 ? t : window_start + (t - window_start) / s.peak_window_ns * s.peak_window_ns;
           in_window = 0;
@@ -35,7 +35,7 @@ SequenceStats computeStats(const Sequence& seq) {
       s.events_t1 = chunk.t.back();
     }
     peak = std::max(peak, in_window);
-    s.triggers = src->triggersRead();
+    s.triggers = src->triggers().size();
     const double span = toSeconds(s.events_t1 - s.events_t0);
     s.events_per_s_mean = span > 0 ? static_cast<double>(s.events) / span : 0.0;
     s.events_per_s_peak = static_cast<double>(peak) / toSeconds(s.peak_window_ns);

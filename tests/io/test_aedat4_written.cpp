@@ -44,7 +44,13 @@ TEST(WrittenAedat4, EventsFramesImuAndTriggersComeOutAsWritten) {
     EXPECT_EQ(aedat.height(), 180);
     const auto src = aedat.openEvents();
     const EventArray ev = test::readAll(*src, 7777);
-    EXPECT_EQ(src->triggersRead(), 2u);
+    ASSERT_EQ(src->triggers().size(), 2u);
+    EXPECT_EQ(src->triggers()[0].t,
+              1000 * kNsPerUs);  // written: falling edge (2) at 1000 µs, pulse (3) at 2000
+    EXPECT_EQ(src->triggers()[0].channel, 2);
+    EXPECT_FALSE(src->triggers()[0].rising);
+    EXPECT_EQ(src->triggers()[1].t, 2000 * kNsPerUs);
+    EXPECT_TRUE(src->triggers()[1].rising);
     std::size_t n = 0;
     while (n < truth.size() && truth.t[n] <= 500'000'000) ++n;
     ASSERT_EQ(ev.size(), n);

@@ -524,7 +524,8 @@ TEST(WrittenBags, StereoBagReadsTheChosenCamera) {
   const Sequence right(bag, {.events_topic = "/davis/right/events", .image_topic = "/davis/right/image_raw"});
   EXPECT_EQ(left.camera().fx, folder.camera().fx);
   EXPECT_EQ(right.camera().fx, folder.camera().fx + 10.0);
-  const EventArray el = test::readAll(*left.openEvents(), 4096), er = test::readAll(*right.openEvents(), 4096);
+  const EventArray el = test::readAll(*left.openEvents(), 4096),
+                   er = test::readAll(*right.openEvents(), 4096);
   ASSERT_GT(el.size(), 1000u);
   ASSERT_EQ(er.size(), (el.size() + 1) / 2);
   for (std::size_t i = 0; i < er.size(); ++i) ASSERT_EQ(er.t[i], el.t[2 * i]) << i;
@@ -534,6 +535,51 @@ TEST(WrittenBags, StereoBagReadsTheChosenCamera) {
   cv::add(fl, fr, sum, cv::noArray(), CV_32S);
   EXPECT_EQ(cv::countNonZero(sum != 255), 0);  // the right image is the left one inverted
   EXPECT_GT(cv::countNonZero(fl != fr), fl.total() / 2);
+}
+
+}  // namespace
+}  // namespace eds
+
+namespace eds {
+namespace {
+
+// libcaer EventPackets (written by tests/tools/write_bags.py with python3-rosbag, packed as
+// libcaer_driver packs them, across a wrap of the sensor's 31-bit µs clock): every event at its ESIM
+// pixel, polarity and time truncated to the µs, on the ROS clock of time_base.
+TEST(WrittenBags, LibcaerPacketsGiveEveryEventToTheMicrosecond) {
+  EDS_REQUIRE_WRITTEN_BAGS(dir);
+  const fs::path out = test::tempDir("libcaer_bag");
+  const fs::path esim = test::sharedDataDir() / "esim_poster6dof_planar";
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --libcaer " +
+                          esim.string() + " " + out.string() + " 0.3";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const Sequence folder(esim), bag(out / "libcaer.bag");
+  EXPECT_EQ(bag.width(), 240);
+  auto a = folder.openEvents();
+  auto b = bag.openEvents();
+  EventArray expected;
+  const EventArray got = test::readAll(*b, 4096);
+  while (a->read(expected, 1 << 16) > 0 && expected.t.back() <= 300'000'000) {
+  }
+  while (!expected.empty() && expected.t.back() > 300'000'000) expected.resize(expected.size() - 1);
+  ASSERT_EQ(got.size(), expected.size());
+  ASSERT_GT(got.size(), 20'000u);
+  const std::string bad =
+      "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --libcaer-bad " + out.string();
+  ASSERT_EQ(std::system(bad.c_str()), 0) << bad;
+  expectReadError([&] { readBag(out / "odd.bag"); }, out / "odd.bag",
+                  "message 0 on /events: libcaer payload of 7 bytes is not 8-byte events");
+  expectReadError([&] { readBag(out / "negative.bag"); }, out / "negative.bag",
+                  "libcaer event 0 has a negative time (payload byte 0)");
+  expectReadError([&] { readBag(out / "code.bag"); }, out / "code.bag",
+                  "libcaer_cmp token 4 has unknown code 7 (payload byte 8)");
+  constexpr TimeNs kRosBase = 1'700'000'000'000'000'000, kSensorStartUs = (TimeNs{1} << 31) - 100'000;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(got.t[i], kRosBase + (expected.t[i] / 1000 + kSensorStartUs) * 1000) << i;
+    ASSERT_EQ(got.x[i], expected.x[i]) << i;
+    ASSERT_EQ(got.y[i], expected.y[i]) << i;
+    ASSERT_EQ(got.p[i], expected.p[i]) << i;
+  }
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "accuracy.hpp"
 #include "core/error.hpp"
 #include "eval/ate.hpp"
+#include "io/convert.hpp"
 #include "system/odometry.hpp"
 #include "test_data.hpp"
 
@@ -341,6 +342,34 @@ TEST(RecordingRuns, EsimInTheMvsecHdf5LayoutGivesByteIdenticalOutputs) {
   writeOdometryOutputs(out / "folder", a, cfg);
   writeOdometryOutputs(out / "mvsec", b, cfg);
   expectSameOutputs(out / "folder", out / "mvsec");
+}
+
+// The ESIM folder converted to eds's own HDF5 layout (nanosecond times, calibration and ground truth
+// inside): the same outputs byte for byte, and the same ground truth.
+TEST(RecordingRuns, EsimConvertedToEdsHdf5GivesByteIdenticalOutputs) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const auto out = test::tempDir("eds_hdf5_runs");
+  const Sequence folder(dir);
+  const ConvertCounts n = convertToEdsHdf5(folder, out / "esim.h5", false);
+  EXPECT_TRUE(n.calibration);
+  const Sequence h5(out / "esim.h5");
+  EXPECT_EQ(h5.format(), "eds HDF5 (from ECD folder)");
+  EXPECT_EQ(h5.camera().fx, folder.camera().fx);
+  EXPECT_EQ(h5.camera().k, folder.camera().k);
+  ASSERT_EQ(h5.frames().size(), folder.frames().size());
+  const Trajectory gt_h5 = h5.groundTruth(), gt_folder = folder.groundTruth();
+  ASSERT_EQ(gt_h5.size(), gt_folder.size());
+  for (std::size_t i = 0; i < gt_h5.size(); ++i) {
+    ASSERT_EQ(gt_h5[i].t, gt_folder[i].t);
+    ASSERT_LT((gt_h5[i].T_w_c.matrix() - gt_folder[i].T_w_c.matrix()).norm(), 1e-14) << i;
+  }
+  OdometryConfig cfg = syncConfig();
+  cfg.duration_s = 1.4;
+  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(h5, cfg);
+  ASSERT_TRUE(a.initialized);
+  writeOdometryOutputs(out / "folder", a, cfg);
+  writeOdometryOutputs(out / "h5", b, cfg);
+  expectSameOutputs(out / "folder", out / "h5");
 }
 
 // The ESIM sequence as AEDAT 4.0 (lz4), written by tests/tools/write_aedat4.py with Debian's

@@ -164,7 +164,49 @@ def write_empty_packet(out_dir):
             bag.write("/events", msg, t=msg.header.stamp)
 
 
+def write_libcaer(seq_dir, out_dir, until):
+    """OUT_DIR/libcaer.bag: the events up to UNTIL s as event_camera_msgs/EventPacket, encoding "libcaer"
+    (8-byte events: data = x << 17 | y << 2 | polarity << 1 | valid, int32 low 31 bits of the sensor's us),
+    as libcaer_driver packs them. The sensor clock starts 0.1 s before its 31-bit counter wraps; each
+    message's time_base is a ROS base time plus the sensor time's high bits, in ns."""
+    Packet = CLASSES["event_camera_msgs/EventPacket"]
+    ros_base_ns, offset_us, wrap = 1_700_000_000_000_000_000, 2**31 - 100_000, 2**31
+    events = read_events(seq_dir, 10**9, until)
+    with rosbag.Bag(f"{out_dir}/libcaer.bag", "w") as bag:
+        for k, i in enumerate(range(0, len(events), 500)):
+            part = events[i:i + 500]
+            sensor_us = [e.ts.secs * 1_000_000 + e.ts.nsecs // 1000 + offset_us for e in part]
+            high = sensor_us[0] - sensor_us[0] % wrap
+            payload = b"".join(struct.pack("<Ii", e.x << 17 | e.y << 2 | int(e.polarity) << 1 | 1, us % wrap)
+                               for e, us in zip(part, sensor_us))
+            msg = Packet(height=180, width=240, seq=k, time_base=ros_base_ns + high * 1000, encoding="libcaer",
+                         is_bigendian=False, events=payload)
+            msg.header.stamp = part[-1].ts
+            bag.write("/events", msg, t=msg.header.stamp)
+
+
+def write_libcaer_bad(out_dir):
+    """Damaged libcaer packets, one bag each: odd.bag (7 payload bytes), negative.bag (a negative
+    timestamp), code.bag (a libcaer_cmp token of undefined code 7 after one good event)."""
+    Packet = CLASSES["event_camera_msgs/EventPacket"]
+    good = struct.pack("<4H", 0x0000, 0x1005, 0x2000 | 10, 0x3000 | 5)  # time 5 us, x 10, y 5 OFF
+    cases = {"odd": ("libcaer", b"\x01" * 7), "negative": ("libcaer", struct.pack("<Ii", 1 << 17 | 1, -5)),
+             "code": ("libcaer_cmp", good + struct.pack("<H", 0x7000))}
+    for name, (encoding, payload) in cases.items():
+        with rosbag.Bag(f"{out_dir}/{name}.bag", "w") as bag:
+            msg = Packet(height=260, width=346, seq=0, time_base=10**18, encoding=encoding, is_bigendian=False,
+                         events=payload)
+            msg.header.stamp = rospy.Time(1, 0)
+            bag.write("/events", msg, t=msg.header.stamp)
+
+
 def main():
+    if sys.argv[1] == "--libcaer-bad":
+        write_libcaer_bad(sys.argv[2])
+        return
+    if sys.argv[1] == "--libcaer":
+        write_libcaer(sys.argv[2], sys.argv[3], float(sys.argv[4]))
+        return
     if sys.argv[1] == "--empty-packet":
         write_empty_packet(sys.argv[2])
         return

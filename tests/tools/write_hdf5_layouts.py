@@ -7,9 +7,14 @@ writes, up to UNTIL_S,
 OUT_DIR/mvsec.h5: davis/left/events (N x 4 float64: x, y, t [s], p -1/+1),
   davis/left/image_raw (N x H x W uint8), davis/left/image_raw_ts (N float64 [s]);
 OUT_DIR/m3ed.h5: prophesee/left/{x, y (uint16), t (int64 us), p (int8 0/1), ms_map_idx (uint64)},
-  ovc/left/data (N x H x W x 1 uint8), ovc/ts (N int64 us).
+  ovc/left/data (N x H x W x 1 uint8), ovc/ts (N int64 us);
+OUT_DIR/vector.h5: VECtor's DSEC-style layout, every dataset Zstandard-compressed (HDF5 filter 32015):
+  events/{x, y (uint16), p (uint8), t (uint32 us after t_offset)}, ms_to_idx (uint64), t_offset (int64, (1,)).
+  h5py stores the chunks as they are, compressed by Debian's `zstd` program (no zstd plugin needed);
+  OUT_DIR/vector_corrupt.h5 the same with its first events/t chunk not zstd.
 """
 import gzip
+import subprocess
 import sys
 
 import h5py
@@ -52,6 +57,37 @@ def main():
         ovc = h.create_group("ovc")
         ovc.create_group("left").create_dataset("data", data=np.stack(images)[..., None])
         ovc.create_dataset("ts", data=np.array([int(round(s * 1e6)) for s in stamps], dtype=np.int64))
+    write_vector(out_dir + "/vector.h5", ev, t_us)
+    write_vector(out_dir + "/vector_corrupt.h5", ev[:20000], t_us[:20000], corrupt=True)
+
+
+def zstd_dataset(h, name, data, chunk=10000, sized=False, corrupt=False):
+    """A dataset compressed with HDF5 filter 32015, its chunks written as the zstd program made them
+    (with the size in each frame's header when `sized`; the first chunk garbage when `corrupt`)."""
+    chunk = min(chunk, len(data))
+    ds = h.create_dataset(name, shape=data.shape, dtype=data.dtype, chunks=(chunk,), compression=32015,
+                          allow_unknown_filter=True)
+    for start in range(0, len(data), chunk):
+        block = np.zeros(chunk, dtype=data.dtype)
+        part = data[start:start + chunk]
+        block[:len(part)] = part
+        size = [f"--stream-size={block.nbytes}"] if sized else []
+        packed = subprocess.run(["zstd", "-q", "-c"] + size, input=block.tobytes(), stdout=subprocess.PIPE,
+                                check=True).stdout
+        ds.id.write_direct_chunk((start,), b"not zstd" if corrupt and start == 0 else packed)
+
+
+def write_vector(path, ev, t_us, corrupt=False):
+    t_offset = int(t_us[0])
+    rel = t_us - t_offset
+    with h5py.File(path, "w") as h:
+        zstd_dataset(h, "events/x", ev[:, 0].astype(np.uint16), sized=True)
+        zstd_dataset(h, "events/y", ev[:, 1].astype(np.uint16))
+        zstd_dataset(h, "events/p", (ev[:, 3] > 0).astype(np.uint8))
+        zstd_dataset(h, "events/t", rel.astype(np.uint32), corrupt=corrupt)
+        ms = np.searchsorted(rel, np.arange(0, rel[-1] // 1000 + 2) * 1000).astype(np.uint64)
+        zstd_dataset(h, "ms_to_idx", ms, chunk=100)
+        h.create_dataset("t_offset", data=np.array([t_offset], dtype=np.int64))
 
 
 if __name__ == "__main__":
