@@ -46,6 +46,7 @@ void Evt3Decoder::timeHigh(std::uint16_t w) {
   time_high_ = full;
   have_high_ = true;
   high_since_low_ = true;
+  updateNow();
 }
 
 void Evt3Decoder::timeLow(std::uint16_t w) {
@@ -56,47 +57,80 @@ void Evt3Decoder::timeLow(std::uint16_t w) {
   time_low_ = low;
   high_since_low_ = false;
   have_time_ = have_high_;
+  updateNow();
+}
+
+void Evt3Decoder::flush(EventArray& cd) {
+  const std::size_t n = stage_.n;
+  cd.t.insert(cd.t.end(), stage_.t, stage_.t + n);
+  cd.x.insert(cd.x.end(), stage_.x, stage_.x + n);
+  cd.y.insert(cd.y.end(), stage_.y, stage_.y + n);
+  cd.p.insert(cd.p.end(), stage_.p, stage_.p + n);
+  stage_.n = 0;
 }
 
 void Evt3Decoder::decode(const std::uint16_t* words, std::size_t n, EventArray& cd,
                          std::vector<TriggerEvent>& triggers) {
-  const auto now = [&] { return static_cast<TimeNs>(((time_high_ << 12) | time_low_) * kNsPerUs); };
   cd.reserve(cd.size() + n);  // about one event per word: the vectors grow once, not per event
+  // The state lives in locals while decoding: stores to the int8 polarities may alias any member, so
+  // the compiler would reload members after each event.
+  Stage& s = stage_;
+  std::size_t k = s.n;
+  std::uint16_t y = y_, base_x = base_x_;
+  std::int8_t vector_polarity = vector_polarity_;
+  TimeNs now = now_;
+  const auto emit = [&](std::uint16_t x, std::int8_t p) {
+    s.t[k] = now;
+    s.x[k] = x;
+    s.y[k] = y;
+    s.p[k] = p;
+    ++k;
+  };
+  const auto save = [&] {
+    s.n = k;
+    y_ = y, base_x_ = base_x, vector_polarity_ = vector_polarity;
+  };
   for (std::size_t i = 0; i < n; ++i) {
+    if (k + 12 > kStage) {
+      s.n = k;
+      flush(cd);
+      k = 0;
+    }
     const std::uint16_t w = words[i];
     const unsigned type = w >> 12;
-    if (type == 0x8) {
-      timeHigh(w);
-      continue;
-    }
-    if (type == 0x6) {
-      timeLow(w);
+    if (type == 0x8 || type == 0x6) {  // TIME_HIGH, TIME_LOW
+      type == 0x8 ? timeHigh(w) : timeLow(w);
+      now = now_;
       continue;
     }
     if (!have_time_) continue;  // no time yet: nothing can be placed
     switch (type) {
-      case 0x0: y_ = w & 0x7FF; break;                                            // ADDR_Y
-      case 0x2: cd.push_back(now(), w & 0x7FF, y_, (w & 0x800) ? 1 : -1); break;  // ADDR_X: one event
-      case 0x3:                                                                   // VECT_BASE_X
-        base_x_ = w & 0x7FF;
-        vector_polarity_ = (w & 0x800) ? 1 : -1;
+      case 0x0: y = w & 0x7FF; break;                          // ADDR_Y
+      case 0x2: emit(w & 0x7FF, (w & 0x800) ? 1 : -1); break;  // ADDR_X: one event
+      case 0x3:                                                // VECT_BASE_X
+        base_x = w & 0x7FF;
+        vector_polarity = (w & 0x800) ? 1 : -1;
         break;
       case 0x4:    // VECT_12: an event at base_x + b for each set bit b
       case 0x5: {  // VECT_8
         const unsigned bits = type == 0x4 ? 12 : 8;
-        const TimeNs t = now();
-        for (unsigned b = 0; b < bits; ++b)
-          if (w & (1u << b)) cd.push_back(t, static_cast<std::uint16_t>(base_x_ + b), y_, vector_polarity_);
-        base_x_ = static_cast<std::uint16_t>(base_x_ + bits);
+        for (unsigned m = w & ((1u << bits) - 1); m != 0; m &= m - 1)
+          emit(static_cast<std::uint16_t>(base_x + __builtin_ctz(m)), vector_polarity);
+        base_x = static_cast<std::uint16_t>(base_x + bits);
         break;
       }
-      case 0xA: triggers.push_back({now(), static_cast<std::uint8_t>((w >> 8) & 0xF), (w & 1) != 0}); break;
+      case 0xA: triggers.push_back({now, static_cast<std::uint8_t>((w >> 8) & 0xF), (w & 1) != 0}); break;
       case 0x7:
       case 0xE:
       case 0xF: break;  // CONTINUED_4, OTHERS, CONTINUED_12: no CD data
-      default: throw EvtWordError{i, type};
+      default:
+        save();
+        flush(cd);  // the events before the bad word stay decoded
+        throw EvtWordError{i, type};
     }
   }
+  save();
+  flush(cd);
 }
 
 void Evt2Decoder::decode(const std::uint32_t* words, std::size_t n, EventArray& cd,

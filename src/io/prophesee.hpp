@@ -34,8 +34,21 @@ class Evt3Decoder {
   void decode(const std::uint16_t* words, std::size_t n, EventArray& cd, std::vector<TriggerEvent>& triggers);
 
  private:
+  // Events are staged in fixed arrays and appended to the output in bulk: four vector push_backs per
+  // event (each a capacity check) cost as much as the decoding itself.
+  static constexpr std::size_t kStage = 2048;
+  struct Stage {
+    TimeNs t[kStage];
+    std::uint16_t x[kStage], y[kStage];
+    std::int8_t p[kStage];
+    std::size_t n = 0;
+  };
+  void flush(EventArray& cd);
   void timeHigh(std::uint16_t w);
   void timeLow(std::uint16_t w);
+  void updateNow() { now_ = static_cast<TimeNs>(((time_high_ << 12) | time_low_) * kNsPerUs); }
+  Stage stage_;
+  TimeNs now_ = 0;
   std::uint64_t time_high_ = 0;  // the time's bits 12..23, with the counter's wraps above them
   std::uint32_t time_low_ = 0;
   bool have_high_ = false, have_time_ = false, high_since_low_ = false;
