@@ -142,6 +142,89 @@ cv::Mat readHdf5Frame(const std::filesystem::path& file, const Hdf5FrameDatasets
   return img;
 }
 
+namespace {
+
+bool exists(hid_t f, const std::string& name) {
+  std::size_t slash = 0;
+  while ((slash = name.find('/', slash + 1)) != std::string::npos)
+    if (H5Lexists(f, name.substr(0, slash).c_str(), H5P_DEFAULT) <= 0) return false;
+  return H5Lexists(f, name.c_str(), H5P_DEFAULT) > 0;
+}
+
+std::vector<double> readNumbers(hid_t f, const std::string& path, const std::string& name, hsize_t count) {
+  Hid ds(H5Dopen2(f, name.c_str(), H5P_DEFAULT), H5Dclose);
+  Hid space(ds.valid() ? H5Dget_space(ds.get()) : H5I_INVALID_HID, H5Sclose);
+  std::vector<double> v(count);
+  if (!space.valid() || H5Sget_simple_extent_npoints(space.get()) != static_cast<hssize_t>(count) ||
+      H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) < 0)
+    throw InputError(path, name + " is not " + std::to_string(count) + " numbers");
+  return v;
+}
+
+// A scalar string dataset, fixed or variable length (h5py writes Python strings as the latter).
+std::string readString(hid_t f, const std::string& path, const std::string& name) {
+  Hid ds(H5Dopen2(f, name.c_str(), H5P_DEFAULT), H5Dclose);
+  Hid type(ds.valid() ? H5Dget_type(ds.get()) : H5I_INVALID_HID, H5Tclose);
+  if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING)
+    throw InputError(path, name + " is not a string");
+  if (H5Tis_variable_str(type.get()) > 0) {
+    char* s = nullptr;
+    Hid mem(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(mem.get(), H5T_VARIABLE);
+    H5Tset_cset(mem.get(), H5Tget_cset(type.get()));  // h5py writes UTF-8
+    if (H5Dread(ds.get(), mem.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &s) < 0)
+      hdf5::failH5(path, "cannot read " + name);
+    const std::string out = s ? s : "";
+    H5free_memory(s);
+    return out;
+  }
+  std::string s(H5Tget_size(type.get()), '\0');
+  if (H5Dread(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()) < 0)
+    hdf5::failH5(path, "cannot read " + name);
+  return s.substr(0, s.find('\0'));
+}
+
+CameraModel readM3edCamera(hid_t f, const std::string& path, const std::string& calib) {
+  CameraModel c;
+  const std::vector<double> k = readNumbers(f, path, calib + "/intrinsics", 4);
+  const std::vector<double> size = readNumbers(f, path, calib + "/resolution", 2);
+  c.fx = k[0], c.fy = k[1], c.cx = k[2], c.cy = k[3];
+  c.width = static_cast<int>(size[0]), c.height = static_cast<int>(size[1]);
+  const std::string model = readString(f, path, calib + "/distortion_model");
+  if (model != "radtan" && model != "equidistant")
+    throw InputError(path, calib + "/distortion_model '" + model + "' is not radtan or equidistant");
+  c.distortion = model == "radtan" ? Distortion::kRadTan : Distortion::kEquidistant;
+  const std::vector<double> d = readNumbers(f, path, calib + "/distortion_coeffs", 4);
+  std::copy(d.begin(), d.end(), c.k.begin());
+  try {
+    c.validate(path + ": " + calib);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path, e.what());
+  }
+  return c;
+}
+
+}  // namespace
+
+M3edCalibration readM3edCalibration(const std::filesystem::path& file) {
+  const std::string path = file.string();
+  Hid f = openFile(path);
+  hdf5::QuietHdf5 quiet;
+  M3edCalibration m;
+  if (exists(f.get(), "prophesee/left/calib/intrinsics"))
+    m.events = readM3edCamera(f.get(), path, "prophesee/left/calib");
+  if (exists(f.get(), "ovc/left/calib/T_to_prophesee_left")) {
+    const std::vector<double> T = readNumbers(f.get(), path, "ovc/left/calib/T_to_prophesee_left", 16);
+    for (int i = 0; i < 16; ++i)
+      m.frames_from_another_camera |= std::abs(T[i] - (i % 5 == 0 ? 1.0 : 0.0)) > 1e-9;
+  }
+  if (m.events && exists(f.get(), "ovc/left/calib/resolution")) {
+    const std::vector<double> size = readNumbers(f.get(), path, "ovc/left/calib/resolution", 2);
+    m.frames_from_another_camera |= size[0] != m.events->width || size[1] != m.events->height;
+  }
+  return m;
+}
+
 struct MvsecEventSource::Impl {
   std::string path, name;
   int width, height;

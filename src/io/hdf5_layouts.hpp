@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/camera.hpp"
 #include "core/time.hpp"
 #include "io/event_source.hpp"
 
@@ -38,6 +40,15 @@ struct Hdf5FrameIndex {
 Hdf5FrameIndex readHdf5FrameIndex(const std::filesystem::path& file, const Hdf5FrameDatasets& where);
 // Frame i as 8-bit gray.
 cv::Mat readHdf5Frame(const std::filesystem::path& file, const Hdf5FrameDatasets& where, std::size_t i);
+
+// M3ED keeps each camera's calibration beside its data (`<camera>/calib/{intrinsics, distortion_model,
+// distortion_coeffs, resolution, T_to_prophesee_left}`). Its frames come from the OVC imager, another
+// camera than the events' unless its T_to_prophesee_left is the identity and its size the same.
+struct M3edCalibration {
+  std::optional<CameraModel> events;  // prophesee/left/calib, when present
+  bool frames_from_another_camera = false;
+};
+M3edCalibration readM3edCalibration(const std::filesystem::path& file);
 
 class MvsecEventSource : public BlockEventSource {
  public:

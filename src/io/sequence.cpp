@@ -282,10 +282,23 @@ void Sequence::openRecordingFile(const fs::path& file) {
     format_ =
         layout == Hdf5Layout::kMvsec ? "MVSEC HDF5 (davis/left)" : "M3ED HDF5 (prophesee/left, ovc/left)";
     hdf5_frames_ = frameDatasets(layout);
+    const M3edCalibration m3ed = layout == Hdf5Layout::kM3ed ? readM3edCalibration(file) : M3edCalibration{};
+    if (m3ed.events) {
+      camera_ = m3ed.events;
+      calibration_source_ = "prophesee/left/calib";
+    }
+    if (m3ed.frames_from_another_camera) {  // EDS needs frames of the event camera's own pixels
+      hdf5_frames_ = {};
+      format_ = "M3ED HDF5 (prophesee/left; the frames of ovc/left are another camera's and not read)";
+    }
     const Hdf5FrameIndex frames = readHdf5FrameIndex(file, hdf5_frames_);
     for (std::size_t i = 0; i < frames.t.size(); ++i) frames_.push_back({frames.t[i], file, i});
-    width_ = frames.width > 0 ? frames.width : options_.width;
-    height_ = frames.height > 0 ? frames.height : options_.height;
+    width_ = camera_ ? camera_->width : frames.width > 0 ? frames.width : options_.width;
+    height_ = camera_ ? camera_->height : frames.height > 0 ? frames.height : options_.height;
+    if (frames.width > 0 && (frames.width != width_ || frames.height != height_))
+      throw InputError(file.string(), "frames of " + std::to_string(frames.width) + "x" +
+                                          std::to_string(frames.height) + " but a calibration of " +
+                                          std::to_string(width_) + "x" + std::to_string(height_));
     if (layout == Hdf5Layout::kM3ed) hdf5_group_ = "prophesee/left";
     return;
   }

@@ -95,6 +95,25 @@ TEST(Hdf5Layouts, VectorZstdEventFileGivesTheTextFoldersEvents) {
   }
 }
 
+// M3ED with calibration groups: the events' camera comes from prophesee/left/calib, and the OVC frames,
+// another camera 2 cm aside, are not paired with the events (EDS needs frames of the same pixels).
+TEST(Hdf5Layouts, M3edCalibrationIsReadAndAnotherCamerasFramesAreNotUsed) {
+  EDS_REQUIRE_LAYOUTS(dir);
+  const Sequence seq(dir / "m3ed_calibrated.h5");
+  EXPECT_EQ(seq.format(),
+            "M3ED HDF5 (prophesee/left; the frames of ovc/left are another camera's and not read)");
+  EXPECT_FALSE(seq.hasFrames());
+  ASSERT_TRUE(seq.hasCalibration());
+  EXPECT_EQ(seq.calibrationSource(), "prophesee/left/calib");
+  const CameraModel& c = seq.camera();
+  EXPECT_EQ(c.distortion, Distortion::kRadTan);
+  EXPECT_EQ(c.fx, 199.092);
+  EXPECT_EQ(c.cy, 110.712);
+  EXPECT_EQ(c.k[0], -0.368436311798);
+  EXPECT_EQ(seq.width(), 240);
+  expectTextEvents(seq, 1000);
+}
+
 TEST(Hdf5Layouts, MalformedMvsecArraysNameTheFileAndDataset) {
   EDS_REQUIRE_LAYOUTS(dir);
   const auto write = [&](const std::string& name, const std::string& python) {

@@ -58,7 +58,30 @@ def main():
         ovc.create_group("left").create_dataset("data", data=np.stack(images)[..., None])
         ovc.create_dataset("ts", data=np.array([int(round(s * 1e6)) for s in stamps], dtype=np.int64))
     write_vector(out_dir + "/vector.h5", ev, t_us)
+    write_m3ed_calibrated(out_dir + "/m3ed_calibrated.h5", ev, t_us, images, stamps)
     write_vector(out_dir + "/vector_corrupt.h5", ev[:20000], t_us[:20000], corrupt=True)
+
+
+def write_m3ed_calibrated(path, ev, t_us, images, stamps):
+    """M3ED with its calibration groups: the event camera's (prophesee/left/calib) and the OVC imager's,
+    2 cm beside it (T_to_prophesee_left), whose frames therefore are another camera's."""
+    with h5py.File(path, "w") as h:
+        left = h.create_group("prophesee/left")
+        for name, data in (("x", ev[:, 0].astype(np.uint16)), ("y", ev[:, 1].astype(np.uint16)), ("t", t_us),
+                           ("p", (ev[:, 3] > 0).astype(np.int8))):
+            left.create_dataset(name, data=data)
+        for group, k in (("prophesee/left/calib", [199.092, 198.829, 132.192, 110.712]),
+                         ("ovc/left/calib", [200.0, 200.0, 120.0, 90.0])):
+            c = h.create_group(group)
+            c["intrinsics"] = np.array(k)
+            c["resolution"] = np.array([240, 180])
+            c["distortion_model"] = "radtan"
+            c["distortion_coeffs"] = np.array([-0.368436311798, 0.150947243557, -0.000296130534, -0.000759431524])
+            T = np.eye(4)
+            T[0, 3] = 0.02 if group.startswith("ovc") else 0.0
+            c["T_to_prophesee_left"] = T
+        h["ovc/left/data"] = np.stack(images)[..., None]
+        h["ovc/ts"] = np.array([int(round(s * 1e6)) for s in stamps], dtype=np.int64)
 
 
 def zstd_dataset(h, name, data, chunk=10000, sized=False, corrupt=False):
