@@ -75,7 +75,9 @@ struct RosEventSource::Impl {
     stats.height = r.u32("height");
     stats.width = r.u32("width");
     const bool ros1 = bag->topics()[topic].serialization == RosSerialization::kRos1;
-    const std::uint32_t n = r.sequenceLength(ros1 ? 13 : 16, "events");
+    // 13 bytes an event at least: ROS 1 packs them; CDR pads each to the alignment of its fields from the
+    // message's start, which gives 14 or 16 by turns.
+    const std::uint32_t n = r.sequenceLength(13, "events");
     pending.reserve(n);
     if (ros1) {
       decodePackedEvents(r.view().take(13 * static_cast<std::size_t>(n), "events"), n, pending);

@@ -372,6 +372,74 @@ TEST(RecordingRuns, EsimConvertedToEdsHdf5GivesByteIdenticalOutputs) {
   expectSameOutputs(out / "folder", out / "h5");
 }
 
+// The ESIM sequence as a rosbag2 MCAP file of ROS 2 (CDR) messages in zstd chunks
+// (tests/tools/write_mcap.py): events, frames and ground truth exactly as the folder's, the same outputs.
+TEST(RecordingRuns, EsimAsMcapGivesByteIdenticalOutputs) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import PIL' > /dev/null 2>&1") == 0 &&
+                            std::system("zstd --version > /dev/null 2>&1") == 0,
+                        "Debian python3-pil, zstd");
+  const auto out = test::tempDir("mcap_runs");
+  const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_mcap.py " + dir.string() +
+                          " " + (out / "esim.mcap").string() + " 1.4 zstd";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const Sequence folder(dir), mcap(out / "esim.mcap");
+  EXPECT_EQ(mcap.calibrationSource(), "CameraInfo on /dvs/camera_info");
+  const EventArray a = allEvents(folder), b = allEvents(mcap);
+  const std::size_t n =
+      static_cast<std::size_t>(std::upper_bound(a.t.begin(), a.t.end(), 1'400'000'000) - a.t.begin());
+  ASSERT_EQ(b.size(), n);
+  EXPECT_TRUE(
+      std::equal(b.t.begin(), b.t.end(), a.t.begin()) && std::equal(b.x.begin(), b.x.end(), a.x.begin()) &&
+      std::equal(b.y.begin(), b.y.end(), a.y.begin()) && std::equal(b.p.begin(), b.p.end(), a.p.begin()));
+  ASSERT_EQ(mcap.frames().size(), 36u);
+  for (std::size_t i = 0; i < mcap.frames().size(); ++i) {
+    ASSERT_EQ(mcap.frames()[i].t, folder.frames()[i].t);
+    ASSERT_EQ(cv::norm(mcap.loadFrame(i), folder.loadFrame(i), cv::NORM_INF), 0.0) << i;
+  }
+  const Trajectory gt = mcap.groundTruth(), gt_folder = folder.groundTruth();
+  ASSERT_EQ(gt.size(), 280u);
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    ASSERT_EQ(gt[i].t, gt_folder[i].t);
+    ASSERT_EQ(gt[i].T_w_c.matrix(), gt_folder[i].T_w_c.matrix()) << i;
+  }
+  OdometryConfig cfg = syncConfig();
+  cfg.duration_s = 1.4;
+  const OdometryResult ra = runOdometry(folder, cfg), rb = runOdometry(mcap, cfg);
+  ASSERT_TRUE(ra.initialized);
+  writeOdometryOutputs(out / "folder", ra, cfg);
+  writeOdometryOutputs(out / "mcap", rb, cfg);
+  expectSameOutputs(out / "folder", out / "mcap");
+}
+
+// The layouts that keep microseconds (DSEC / TUM-VIE, VECtor with zstd, M3ED), written by python3-h5py
+// from the ESIM events cut to the microsecond, beside a text folder of the same events: every run gives
+// the text folder's outputs byte for byte.
+TEST(RecordingRuns, EsimInEveryMicrosecondHdf5LayoutGivesByteIdenticalOutputs) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import h5py, numpy, PIL' > /dev/null 2>&1") == 0 &&
+                            std::system("zstd --version > /dev/null 2>&1") == 0,
+                        "Debian python3-h5py, python3-pil, zstd");
+  const auto out = test::tempDir("us_layout_runs");
+  for (const std::string mode : {"--us-folders " + dir.string() + " " + out.string() + " 1.4",
+                                 dir.string() + " " + out.string() + " 1.4"}) {
+    const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_hdf5_layouts.py " + mode;
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  OdometryConfig cfg = syncConfig();
+  cfg.duration_s = 1.4;
+  const OdometryResult ref = runOdometry(Sequence(out / "us_text"), cfg);
+  ASSERT_TRUE(ref.initialized);
+  writeOdometryOutputs(out / "out_text", ref, cfg);
+  for (const char* name : {"us_dsec", "us_vector", "m3ed.h5"}) {
+    SCOPED_TRACE(name);
+    Sequence seq(out / name);
+    if (!seq.hasCalibration()) seq.setCamera(readCameraFile(dir / "calib.txt"), "calib.txt");
+    writeOdometryOutputs(out / (std::string("out_") + name), runOdometry(seq, cfg), cfg);
+    expectSameOutputs(out / "out_text", out / (std::string("out_") + name));
+  }
+}
+
 // The ESIM sequence as AEDAT 4.0 (lz4), written by tests/tools/write_aedat4.py with Debian's
 // python3-flatbuffers, with the folder's calibration: AEDAT holds microseconds, so the events differ from
 // the folder's by under 1 us and the run is compared by its accuracy, not byte by byte.

@@ -3,6 +3,7 @@
 test input for eds's HDF5 readers (they share no code with this script).
 
 usage: write_hdf5_layouts.py SEQUENCE_DIR OUT_DIR UNTIL_S
+       write_hdf5_layouts.py --us-folders SEQUENCE_DIR OUT_DIR UNTIL_S
 writes, up to UNTIL_S,
 OUT_DIR/mvsec.h5: davis/left/events (N x 4 float64: x, y, t [s], p -1/+1),
   davis/left/image_raw (N x H x W uint8), davis/left/image_raw_ts (N float64 [s]);
@@ -14,6 +15,8 @@ OUT_DIR/vector.h5: VECtor's DSEC-style layout, every dataset Zstandard-compresse
   OUT_DIR/vector_corrupt.h5 the same with its first events/t chunk not zstd.
 """
 import gzip
+import os
+import shutil
 import subprocess
 import sys
 
@@ -22,7 +25,46 @@ import numpy as np
 from PIL import Image
 
 
+def write_us_folders(seq_dir, out_dir, until):
+    """The sequence with its event times cut to the microsecond, as folders sharing its frames, calibration
+    and ground truth: OUT_DIR/us_text (events.txt), OUT_DIR/us_dsec (events.h5 in DSEC's layout: int64 us
+    after t_offset, ms_to_idx), OUT_DIR/us_vector (VECtor's: uint32 us, zstd), so that a run over each
+    must give the same outputs."""
+    rows = []
+    with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
+        for line in f:
+            t, x, y, p = line.split()
+            if float(t) > until:
+                break
+            sec, _, frac = t.partition(".")
+            rows.append((int(sec) * 1_000_000 + int((frac + "000000")[:6]), int(x), int(y), int(p)))
+    ev = np.array(rows, dtype=np.int64)
+    for name in ("us_text", "us_dsec", "us_vector"):
+        d = os.path.join(out_dir, name)
+        os.makedirs(d, exist_ok=True)
+        for f in ("images.txt", "calib.txt", "groundtruth.txt"):
+            shutil.copy(os.path.join(seq_dir, f), d)
+        if not os.path.exists(os.path.join(d, "images")):
+            os.symlink(os.path.abspath(os.path.join(seq_dir, "images")), os.path.join(d, "images"))
+    with open(os.path.join(out_dir, "us_text/events.txt"), "w") as f:
+        for t, x, y, p in rows:
+            f.write(f"{t // 1_000_000}.{t % 1_000_000:06d} {x} {y} {p}\n")
+    t_offset = int(ev[0, 0])
+    rel = ev[:, 0] - t_offset
+    with h5py.File(os.path.join(out_dir, "us_dsec/events.h5"), "w") as h:
+        h["events/x"], h["events/y"] = ev[:, 1].astype(np.uint16), ev[:, 2].astype(np.uint16)
+        h["events/t"], h["events/p"] = rel, ev[:, 3].astype(np.uint8)
+        h["ms_to_idx"] = np.searchsorted(rel, np.arange(0, rel[-1] // 1000 + 2) * 1000).astype(np.uint64)
+        h["t_offset"] = np.int64(t_offset)
+    pm = np.where(ev[:, 3] > 0, 1.0, -1.0)
+    write_vector(os.path.join(out_dir, "us_vector/events.h5"), np.stack([ev[:, 1], ev[:, 2], ev[:, 0], pm], 1),
+                 ev[:, 0])
+
+
 def main():
+    if sys.argv[1] == "--us-folders":
+        write_us_folders(sys.argv[2], sys.argv[3], float(sys.argv[4]))
+        return
     seq_dir, out_dir, until = sys.argv[1], sys.argv[2], float(sys.argv[3])
     rows = []
     with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
