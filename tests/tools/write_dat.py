@@ -4,24 +4,17 @@
 uint32 t (us) and uint32 x | y << 14 | p << 28, little-endian.
 
 usage: write_dat.py SEQ_DIR OUT.dat UNTIL_S [--type T] [--size S] [--width W]"""
-import gzip
 import sys
 
 import numpy as np
+
+from esim_text import events_us
 
 
 def main():
     seq_dir, out, until = sys.argv[1], sys.argv[2], float(sys.argv[3])
     opts = dict(zip(sys.argv[4::2], sys.argv[5::2]))
-    rows = []
-    with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
-        for line in f:
-            t, x, y, p = line.split()
-            if float(t) > until:
-                break
-            sec, _, frac = t.partition(".")
-            rows.append((int(sec) * 1_000_000 + int((frac + "000000")[:6]), int(x), int(y), int(p)))
-    a = np.array(rows, dtype=np.int64)
+    a = np.array(events_us(seq_dir, until), dtype=np.int64)
     rec = np.zeros(len(a), dtype=[("t", "<u4"), ("_", "<u4")])
     rec["t"] = a[:, 0]
     rec["_"] = a[:, 1] | (a[:, 2] << 14) | (a[:, 3] << 28)

@@ -14,7 +14,6 @@ OUT_DIR/vector.h5: VECtor's DSEC-style layout, every dataset Zstandard-compresse
   h5py stores the chunks as they are, compressed by Debian's `zstd` program (no zstd plugin needed);
   OUT_DIR/vector_corrupt.h5 the same with its first events/t chunk not zstd.
 """
-import gzip
 import os
 import shutil
 import subprocess
@@ -24,20 +23,15 @@ import h5py
 import numpy as np
 from PIL import Image
 
+from esim_text import events_us, text_events
+
 
 def write_us_folders(seq_dir, out_dir, until):
     """The sequence with its event times cut to the microsecond, as folders sharing its frames, calibration
     and ground truth: OUT_DIR/us_text (events.txt), OUT_DIR/us_dsec (events.h5 in DSEC's layout: int64 us
     after t_offset, ms_to_idx), OUT_DIR/us_vector (VECtor's: uint32 us, zstd), so that a run over each
     must give the same outputs."""
-    rows = []
-    with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
-        for line in f:
-            t, x, y, p = line.split()
-            if float(t) > until:
-                break
-            sec, _, frac = t.partition(".")
-            rows.append((int(sec) * 1_000_000 + int((frac + "000000")[:6]), int(x), int(y), int(p)))
+    rows = events_us(seq_dir, until)
     ev = np.array(rows, dtype=np.int64)
     for name in ("us_text", "us_dsec", "us_vector"):
         d = os.path.join(out_dir, name)
@@ -66,13 +60,7 @@ def main():
         write_us_folders(sys.argv[2], sys.argv[3], float(sys.argv[4]))
         return
     seq_dir, out_dir, until = sys.argv[1], sys.argv[2], float(sys.argv[3])
-    rows = []
-    with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
-        for line in f:
-            t, x, y, p = line.split()
-            if float(t) > until:
-                break
-            rows.append((float(x), float(y), float(t), 1.0 if p == "1" else -1.0))
+    rows = [(float(x), float(y), float(t), 1.0 if p == 1 else -1.0) for t, x, y, p in text_events(seq_dir, until)]
     images, stamps = [], []
     with open(seq_dir + "/images.txt") as f:
         for line in f:

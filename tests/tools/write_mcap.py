@@ -6,12 +6,13 @@ summary. Debian has no MCAP writer, so the framing follows the MCAP specificatio
 also checked against a real MCAP file.
 
 usage: write_mcap.py SEQ_DIR OUT.mcap UNTIL_S [zstd]"""
-import gzip
 import struct
 import subprocess
 import sys
 
 from PIL import Image
+
+from esim_text import seconds_ns, text_events
 
 
 class Cdr:
@@ -39,11 +40,6 @@ class Cdr:
 
     def bytes(self):
         return b"\0\x01\0\0" + bytes(self.b)
-
-
-def stamp(t_text):
-    sec, _, frac = t_text.partition(".")
-    return int(sec), int((frac + "000000000")[:9])
 
 
 def record(op, body):
@@ -112,7 +108,7 @@ def main():
             if float(t) > until:
                 break
             img = Image.open(seq_dir + "/" + path).convert("L")
-            s, ns = stamp(t)
+            s, ns = seconds_ns(t)
             c = Cdr().header(s, ns).put("II", img.height, img.width).string("mono8").put("B", 0).put("I", img.width)
             c.put("I", img.width * img.height)
             c.b += img.tobytes()
@@ -129,16 +125,10 @@ def main():
             v = line.split()
             if not v or v[0].startswith("#") or float(v[0]) > until:
                 continue
-            s, ns = stamp(v[0])
+            s, ns = seconds_ns(v[0])
             c = Cdr().header(s, ns, "world").put("7d", *(float(x) for x in v[1:8]))
             items.append((s * 10**9 + ns, "/optitrack/pose", "geometry_msgs/msg/PoseStamped", c.bytes()))
-    events = []
-    with gzip.open(seq_dir + "/events.txt.gz", "rt") as f:
-        for line in f:
-            t, x, y, p = line.split()
-            if float(t) > until:
-                break
-            events.append((stamp(t), int(x), int(y), p == "1"))
+    events = [(seconds_ns(t), x, y, p == 1) for t, x, y, p in text_events(seq_dir, until)]
     for i in range(0, len(events), 2500):
         part = events[i:i + 2500]
         (s, ns) = part[-1][0]
