@@ -44,6 +44,15 @@ double depthRatio(const std::vector<KeyframePoint>& pts) {
   std::sort(inv.begin(), inv.end());
   return inv[inv.size() * 9 / 10] / inv[inv.size() / 10];
 }
+
+double medianInvDepth(const std::vector<KeyframePoint>& pts) {
+  std::vector<double> inv;
+  for (const KeyframePoint& p : pts)
+    if (p.inv_depth > 0) inv.push_back(p.inv_depth);
+  if (inv.empty()) return 1.0;
+  std::nth_element(inv.begin(), inv.begin() + inv.size() / 2, inv.end());
+  return inv[inv.size() / 2];
+}
 }  // namespace
 
 FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res,
@@ -114,6 +123,37 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   if (new_kf && tr.ok) T_w_out = addKeyframe(t, img, T_w_f, a_last_, b_last_);
   setLast(T_w_out);
   return T_w_out;
+}
+
+std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& found) {
+  adoptReference(cfg_.threaded_backend);
+  if (!has_ref_) {
+    found = "no reference to relocalize against";
+    return std::nullopt;
+  }
+  const Relocalization r = eds::relocalize(ref_, img, cam_, cfg_.recovery.relocalizer);
+  if (!r.ok) {
+    found = std::to_string(r.inliers) + " of " + std::to_string(r.matches) +
+            " feature matches with keyframe " + std::to_string(ref_id_) + " agree on a pose: too few";
+    return std::nullopt;
+  }
+  SE3 T_f_kf = r.T_f_kf;
+  double alpha = alpha_, beta = beta_;
+  const FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta, 0);
+  // How far the alignment moved the features' pose, relative to the scene's depth.
+  const double moved = (T_f_kf * r.T_f_kf.inverse()).translation().norm() * medianInvDepth(ref_.points);
+  if (!tr.ok || moved > cfg_.recovery.max_refinement) {
+    found = "the alignment from the features' pose (" + std::to_string(r.inliers) + " of " +
+            std::to_string(r.matches) + " matches) " + (tr.ok ? "moved too far" : "failed");
+    return std::nullopt;
+  }
+  found = std::to_string(r.inliers) + " of " + std::to_string(r.matches) + " feature matches with keyframe " +
+          std::to_string(ref_id_) + ", aligned to rmse " + std::to_string(tr.rmse);
+  alpha_ = alpha, beta_ = beta;
+  last_rmse_ = tr.rmse;
+  has_last_ = has_prev_ = false;  // at rest: the velocity before the loss means nothing now
+  setLast(T_w_kf_ * T_f_kf.inverse());
+  return last_T_w_f_;
 }
 
 void FrameFrontend::setLast(const SE3& T_w_f) {

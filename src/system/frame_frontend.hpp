@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "frontend/frame_tracker.hpp"
+#include "frontend/relocalizer.hpp"
 #include "system/backend_worker.hpp"
 #include "system/odometry.hpp"
 
@@ -32,6 +33,10 @@ class FrameFrontend {
   // tried first. Adds a keyframe when the policy asks.
   SE3 track(TimeNs t, const cv::Mat& img, const SE3* prior = nullptr);
   bool lastTrackOk() const { return last_ok_; }
+  // The frame's pose with no starting point (features against the newest reference, then the direct
+  // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when
+  // neither finds the frame. `found` says how (matches and inliers), or why not.
+  std::optional<SE3> relocalize(const cv::Mat& img, std::string& found);
 
   void setLast(const SE3& T_w_f);
   void setLastBrightness(double a, double b) { a_last_ = a, b_last_ = b; }

@@ -71,6 +71,7 @@ class Core {
     std::optional<ScopedStage> stage(std::in_place, &clock_, Stage::kFramePreparation);
     if (std::string why = quality_.check(t, raw); !why.empty()) {
       ++res_.frames_rejected;
+      ++inputs_without_pose_;
       res_.failures.push_back({t, "frame not used: " + why});
       return;
     }
@@ -91,11 +92,22 @@ class Core {
     }
     // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
     stage.emplace(&clock_, Stage::kFrameTracking);
+    std::optional<SE3> found;
+    if (cfg_.recovery.enabled && !recover(t, img, found)) return;
     const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
-    const SE3 T_w_f = odo_.track(t, img, prior ? &last_event_.T_w_c : nullptr);
+    const SE3 T_w_f = odo_.track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
     res_.frames.push_back({t, T_w_f});
     res_.frame_anchors.push_back({odo_.referenceId(), odo_.T_w_kf().inverse() * T_w_f});
-    if (odo_.lastTrackOk()) events_.correct(t, T_w_f);
+    if (odo_.lastTrackOk()) {
+      events_.correct(t, T_w_f);
+      last_good_t_ = t;
+      failed_in_row_ = 0;
+      inputs_without_pose_ = 0;
+    } else {
+      ++inputs_without_pose_;
+      if (++failed_in_row_ >= cfg_.recovery.failed_frames && cfg_.recovery.enabled)
+        loseTrack(t, std::to_string(failed_in_row_) + " frame alignments failed in a row");
+    }
     syncReference();
   }
 
@@ -115,6 +127,10 @@ class Core {
       }
       return;
     }
+    if (lost_) {
+      res_.failures.push_back({ef.t, "event frame: the track is lost; waiting for a frame to relocalize"});
+      return;
+    }
     odo_.adoptReference(false);
     syncReference();
     trackEvents(ef, nullptr);
@@ -128,6 +144,7 @@ class Core {
   void initialize(TimeNs t, const cv::Mat& img) {
     res_.initialized = true;
     res_.init_t = t;
+    last_good_t_ = t;
     res_.init_frames = static_cast<int>(boot_.frames().size());
     res_.init_restarts = boot_.restarts();
     // Keyframe 0 is the reference with the bootstrap's depths; keyframe 1 the frame that completed it.
@@ -182,6 +199,39 @@ class Core {
     if (n >= 1) events_.correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
   }
 
+  // The track is lost after a gap with no pose from frames or events; while it is, each usable frame
+  // is relocalized. False: still lost (this frame gives no pose). `found`: the relocalized pose.
+  bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found) {
+    // A gap alone is no loss (frames may be seconds apart); inputs that gave no pose over it are.
+    if (!lost_ && inputs_without_pose_ > 0 && t - last_good_t_ > fromSeconds(cfg_.recovery.gap_s))
+      loseTrack(last_good_t_, "no pose from frames or events for " +
+                                  std::to_string(toSeconds(t - last_good_t_)).substr(0, 5) + " s");
+    if (!lost_) return true;
+    TrackLoss& loss = res_.losses.back();
+    ++loss.attempts;
+    std::string how;
+    found = odo_.relocalize(img, how);
+    if (!found) {
+      res_.failures.push_back({t, "track lost, relocalization: " + how});
+      return false;
+    }
+    lost_ = false;
+    failed_in_row_ = inputs_without_pose_ = 0;
+    loss.t_recovered = t;
+    loss.recovery = how;
+    // The events start again from the frame's pose, at rest: their pose from before the loss is no prior.
+    syncReference();
+    events_.restartFrom(*found);
+    has_event_pose_ = false;
+    return true;
+  }
+
+  void loseTrack(TimeNs t_last_pose, const std::string& cause) {
+    lost_ = true;
+    res_.losses.push_back({t_last_pose, -1, cause, "", 0});
+    res_.failures.push_back({t_last_pose, "track lost: " + cause});
+  }
+
   void pruneBuffered() {
     const std::vector<BootstrapFrame>& bf = boot_.frames();
     const TimeNs t0 = boot_.hasReference() && !bf.empty() ? bf.front().t : std::numeric_limits<TimeNs>::max();
@@ -224,6 +274,7 @@ class Core {
     res_.event_track_ms.push_back(msSince(t0));
     if (!T) {
       res_.failures.push_back({ef.t, "event frame: " + why});
+      ++inputs_without_pose_;
       return;
     }
     if (plausible && !plausible(*T)) {
@@ -231,6 +282,8 @@ class Core {
       return;
     }
     ++res_.events_tracked;
+    last_good_t_ = ef.t;
+    inputs_without_pose_ = 0;
     last_event_ = {ef.t, *T};
     has_event_pose_ = true;
     res_.events.push_back(last_event_);
@@ -270,6 +323,10 @@ class Core {
   StampedPose last_event_;
   bool has_event_pose_ = false;
   TimeNs last_t_ = 0;
+  TimeNs last_good_t_ = 0;  // of the last pose from a frame or event frame
+  bool lost_ = false;
+  int failed_in_row_ = 0;        // frame alignments
+  int inputs_without_pose_ = 0;  // frames and event frames since the last pose
   int snapshot_ref_id_ = -1;
   std::size_t snapshot_refs_ = 0, snapshot_stride_ = 1;
 };

@@ -22,6 +22,7 @@
 #include "frontend/frame_quality.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
+#include "frontend/relocalizer.hpp"
 #include "init/bootstrap.hpp"
 #include "io/sequence.hpp"
 #include "mapping/depth_fill.hpp"
@@ -63,6 +64,19 @@ struct StreamConfig {
 
 EDS_FIELDS(StreamConfig, max_frame_wait_s, max_pending_frames)
 
+// When the track is lost (frames or event frames came but gave no pose for `gap_s`, or `failed_frames`
+// frame alignments failed in a row), each usable frame is relocalized against the newest keyframe (features,
+// then the direct alignment) until one is found; meanwhile no pose is written and event frames wait.
+struct RecoveryConfig {
+  bool enabled = true;
+  double gap_s = 0.3;
+  int failed_frames = 3;
+  double max_refinement = 0.1;  // the alignment may move the features' pose this fraction of the depth
+  RelocalizerConfig relocalizer;
+};
+
+EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, relocalizer)
+
 struct OdometryConfig {
   StreamConfig stream;
   FrameQualityConfig frame_quality;
@@ -97,6 +111,7 @@ struct OdometryConfig {
   // The refined event-rate positions (trajectory_events.txt): a local quadratic fit over ±this many
   // seconds (system/trajectory_smoothing.hpp; 0: as composed). The live poses are never smoothed.
   double event_smoothing_s = 0.06;
+  RecoveryConfig recovery;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate
   double start_s = 0;     // skip this much from the first frame
   double duration_s = 0;  // 0: to the end
@@ -105,11 +120,18 @@ struct OdometryConfig {
 EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events,
            flicker_filter, event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg,
-           event_smoothing_s, frame_rate, start_s, duration_s)
+           event_smoothing_s, recovery, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;
   std::string reason;
+};
+
+// A lost track and its recovery: from the last pose before it to the first after it (-1: never).
+struct TrackLoss {
+  TimeNs t_lost = 0, t_recovered = -1;
+  std::string cause, recovery;
+  int attempts = 0;  // frames tried
 };
 
 // An event frame next to the event generation model's prediction at its tracked pose (both on the
@@ -155,6 +177,7 @@ struct OdometryResult {
   TimeNs first_t = 0;  // first frame considered
   int init_frames = 0, init_restarts = 0;
   std::vector<OdometryFailure> failures;
+  std::vector<TrackLoss> losses;
   std::vector<TimeNs> event_last_t;  // per event pose: the time of its event frame's last event
   std::vector<double> track_ms, mapping_ms, ba_ms;  // per frame; per keyframe (both)
   std::vector<int> window_points;                   // per keyframe, after the solve

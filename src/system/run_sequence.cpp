@@ -273,6 +273,15 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   nlohmann::json fails = nlohmann::json::array();
   for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
   j["failures"] = fails;
+  nlohmann::json losses = nlohmann::json::array();
+  for (const TrackLoss& l : r.losses)
+    losses.push_back(
+        {{"t_lost", toSeconds(l.t_lost)},
+         {"t_recovered", l.t_recovered >= 0 ? nlohmann::json(toSeconds(l.t_recovered)) : nullptr},
+         {"cause", l.cause},
+         {"recovery", l.recovery},
+         {"frames_tried", l.attempts}});
+  j["losses"] = losses;
   j["config"] = {{"frame_rate", cfg.frame_rate},
                  {"start_s", cfg.start_s},
                  {"duration_s", cfg.duration_s},

@@ -26,11 +26,13 @@ struct Variant {
   double exposure_s;
   bool frame_faults;
   bool event_faults = false;
+  bool covered = false;  // no events and black frames from 3 to 4 s
 };
 
 std::filesystem::path deskSequence(const std::filesystem::path& traj_file, Variant v) {
   const std::string name = "faulty_" + std::to_string(static_cast<int>(v.exposure_s * 1000)) + "ms" +
-                           (v.frame_faults ? "_frames" : "") + (v.event_faults ? "_events" : "");
+                           (v.frame_faults ? "_frames" : "") + (v.event_faults ? "_events" : "") +
+                           (v.covered ? "_covered" : "");
   const auto dir = test::tempDir(name);
   const sim::Motion motion{
       sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.04), 0.0, 8.0, traj_file.string())};
@@ -49,14 +51,19 @@ std::filesystem::path deskSequence(const std::filesystem::path& traj_file, Varia
     sc.events.hot_pixel_fraction = 0.001;
     sc.events.hot_pixel_rate_hz = 1000;
   }
+  if (v.covered) {
+    gains = {{at(3.0), at(4.0), 0.0}};
+    faults.gaps = {{at(3.0), at(4.0), 0.0}};
+  }
   test::writeSimSequence(dir, scene, motion, sc, gains, faults);
   return dir;
 }
 
-eval::AteResult runDesk(Variant v, OdometryResult& r) {
+eval::AteResult runDesk(Variant v, OdometryResult& r, bool recovery = true) {
   const Sequence seq(deskSequence(test::sharedDataDir() / "trajectories/ecd_poster_6dof_groundtruth.txt", v));
   OdometryConfig cfg;
   cfg.threaded_backend = false;  // deterministic
+  cfg.recovery.enabled = recovery;
   r = runOdometry(seq, cfg);
   EXPECT_TRUE(r.initialized);
   const eval::AteResult a = eval::evaluateAte(r.events_refined, seq.groundTruth(), eval::EvalConfig{});
@@ -64,8 +71,11 @@ eval::AteResult runDesk(Variant v, OdometryResult& r) {
       "[ desk, %.0f ms exposure%s%s ] ATE %.3f cm, rot %.3f deg (max %.3f), coverage %.1f %%, %zu frames "
       "not used, %zu events of flickering pixels dropped, %zu failures\n",
       v.exposure_s * 1000, v.frame_faults ? ", dimmed 3-4 s, x4 5-5.5 s" : "",
-      v.event_faults ? ", flicker, noise burst, USB drops, hot pixels" : "", a.trans.rmse * 100, a.rot.rmse,
-      a.rot.max, a.coverage * 100, r.frames_rejected, r.events_flicker_dropped, r.failures.size());
+      v.event_faults ? ", flicker, noise burst, USB drops, hot pixels"
+      : v.covered    ? ", covered 3-4 s"
+                     : "",
+      a.trans.rmse * 100, a.rot.rmse, a.rot.max, a.coverage * 100, r.frames_rejected,
+      r.events_flicker_dropped, r.failures.size());
   const auto worst =
       std::max_element(a.rot_errors_deg.begin(), a.rot_errors_deg.end()) - a.rot_errors_deg.begin();
   if (!a.pairs.empty())
@@ -133,6 +143,28 @@ TEST(FaultyEvents, FlickerNoiseBurstUsbDropsAndHotPixels) {
     EXPECT_TRUE(f.reason.starts_with("event frame: ") && inFault(s))
         << "failure at " << s << " s: " << f.reason;
   }
+}
+
+// The camera covered for a second (no events, black frames) while it moves on: the first frame after
+// is relocalized (features against the newest keyframe, then the direct alignment) and the track goes
+// on in the same map; without the recovery it follows a wrong alignment for the rest of the run.
+TEST(Recovery, ACoveredCameraIsRelocalizedWhenUncovered) {
+  EDS_REQUIRE_SHARED(traj, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  OdometryResult r;
+  const eval::AteResult a = runDesk({0.01, false, false, true}, r);
+  ASSERT_EQ(r.losses.size(), 1u);
+  const TrackLoss& loss = r.losses.front();
+  std::printf("  lost at %.3f s (%s), recovered at %.3f s after %d frames: %s\n",
+              toSeconds(loss.t_lost - r.first_t), loss.cause.c_str(), toSeconds(loss.t_recovered - r.first_t),
+              loss.attempts, loss.recovery.c_str());
+  EXPECT_NEAR(toSeconds(loss.t_lost - r.first_t), 3.0, 0.06);
+  EXPECT_NEAR(toSeconds(loss.t_recovered - r.first_t), 4.0, 0.11);  // the first or second frame after
+  EXPECT_LE(a.trans.rmse * 100, 0.3);
+  EXPECT_LE(a.rot.max, 1.0);
+  EXPECT_GE(a.coverage, 0.8);  // the covered second has no pose
+  OdometryResult without;
+  const eval::AteResult b = runDesk({0.01, false, false, true}, without, false);
+  EXPECT_GT(b.trans.rmse * 100, 5.0);
 }
 
 }  // namespace
