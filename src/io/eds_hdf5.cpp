@@ -249,8 +249,8 @@ void EdsHdf5Writer::finish(const EdsHdf5Contents& rest) {
   if (rest.camera) writeCalibration(m.file.get(), m.path, *rest.camera, rest.calibration_source);
   writeStreams(m.file.get(), m.path, rest);
   for (Appendable* a : {&m.t, &m.x, &m.y, &m.p, &m.images, &m.frame_t}) a->close();
-  if (H5Fclose(m.file.get()) < 0) failH5(m.path, "cannot close the HDF5 file");
-  m.file = Hid();
+  if (H5Fflush(m.file.get(), H5F_SCOPE_LOCAL) < 0) failH5(m.path, "cannot write the HDF5 file");
+  m.file.reset();
   m.out.commit();
 }
 

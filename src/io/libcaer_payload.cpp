@@ -1,6 +1,7 @@
 #include "io/libcaer_payload.hpp"
 
 #include <cstring>
+#include <limits>
 
 namespace eds {
 
@@ -19,7 +20,12 @@ void decodeLibcaer(const std::uint8_t* data, std::size_t bytes, TimeNs time_base
     std::memcpy(&low, data + i * kEventBytes + 4, 4);
     if (low < 0)
       throw PayloadError(i * kEventBytes, "libcaer event " + std::to_string(i) + " has a negative time");
-    if (i > 0 && low < last_low) high += (TimeNs{1} << 31) * kNsPerUs;  // the 31-bit µs clock wrapped
+    if (i > 0 && low < last_low) {  // the 31-bit µs clock wrapped
+      constexpr TimeNs kWrap = (TimeNs{1} << 31) * kNsPerUs;
+      if (high > std::numeric_limits<TimeNs>::max() - 2 * kWrap)
+        throw PayloadError(i * kEventBytes, "libcaer event " + std::to_string(i) + ": time beyond int64 ns");
+      high += kWrap;
+    }
     last_low = low;
     out.t[first + i] = high + static_cast<TimeNs>(low) * kNsPerUs;
     out.x[first + i] = static_cast<std::uint16_t>((word >> 17) & 0x7FFF);

@@ -60,6 +60,12 @@ std::string summarySection(const RunData& run) {
   t += row("speed", fmt("%.2f s wall, real-time factor %.2f, peak memory %.0f MB", num(s, "wall_s"),
                         num(s, "real_time_factor"), num(s, "peak_rss_mb")));
   if (s.value("interrupted", false)) t += row("interrupted", fmt("at %.2f s", num(s, "interrupted_at_s")));
+  for (const nlohmann::json& l : s.value("losses", nlohmann::json::array()))
+    t += row("track lost", fmt("at %.2f s, ", num(l, "t_lost")) + escapeXml(l.value("cause", "")) + "; " +
+                               (l.value("t_recovered", nlohmann::json()).is_number()
+                                    ? fmt("recovered at %.2f s: ", num(l, "t_recovered")) +
+                                          escapeXml(l.value("recovery", ""))
+                                    : std::string("not recovered")));
   t += "</table><table><tr><th>stage (ms per item)</th><th>median</th><th>p95</th><th>max</th></tr>";
   const nlohmann::json timings = s.value("timings_ms", nlohmann::json::object());
   for (const auto& [key, st] : timings.items())

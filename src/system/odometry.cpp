@@ -205,7 +205,7 @@ class Core {
     // A gap alone is no loss (frames may be seconds apart); inputs that gave no pose over it are.
     if (!lost_ && inputs_without_pose_ > 0 && t - last_good_t_ > fromSeconds(cfg_.recovery.gap_s))
       loseTrack(last_good_t_, "no pose from frames or events for " +
-                                  std::to_string(toSeconds(t - last_good_t_)).substr(0, 5) + " s");
+                                  std::to_string(std::lround(1000 * toSeconds(t - last_good_t_))) + " ms");
     if (!lost_) return true;
     TrackLoss& loss = res_.losses.back();
     ++loss.attempts;
@@ -453,6 +453,16 @@ class Odometry::Impl {
     if (!(cfg.stream.max_frame_wait_s >= 0) || cfg.stream.max_pending_frames < 0)
       throw std::invalid_argument(
           "Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
+    const RecoveryConfig& r = cfg.recovery;
+    const RelocalizerConfig& rl = r.relocalizer;
+    if (!(r.gap_s > 0) || r.failed_frames < 1 || !(r.max_refinement > 0))
+      throw std::invalid_argument(
+          "Odometry: recovery.gap_s and max_refinement must be > 0, failed_frames >= 1");
+    if (rl.features < 4 || rl.min_inliers < 4 || rl.depth_radius_px < 1 || !(rl.ratio > 0 && rl.ratio <= 1) ||
+        !(rl.ransac_px > 0) || !(rl.min_inlier_fraction >= 0 && rl.min_inlier_fraction <= 1))
+      throw std::invalid_argument(
+          "Odometry: recovery.relocalizer needs features and min_inliers >= 4 (a pose needs 4 points), "
+          "depth_radius_px >= 1, ratio in (0, 1], ransac_px > 0, min_inlier_fraction in [0, 1]");
     return cfg;
   }
 

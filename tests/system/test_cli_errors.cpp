@@ -74,6 +74,10 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
   expectError("run " + esim() + runOut() + " --set frame_quality.history=0", "history >= 1");
   expectError("run " + esim() + runOut() + " --set frame_quality.history=many", "frame_quality.history");
   expectError("run " + esim() + runOut() + " --set no_such.parameter=1", "no_such.parameter");
+  expectError("run " + esim() + runOut() + " --set recovery.gap_s=0",
+              "recovery.gap_s and max_refinement must be > 0");
+  expectError("run " + esim() + runOut() + " --set recovery.relocalizer.min_inliers=3",
+              "min_inliers >= 4 (a pose needs 4 points)");
   expectError("run " + esim() + runOut() + " --frame-rate -1", "must not be negative");
   expectError("run " + esim() + runOut() + " --start 100", "no frame in the requested time range");
 }
@@ -86,6 +90,11 @@ TEST_F(CliErrors, MissingFilesAreNamed) {
   expectError("run " + (out_ / "no_sequence").string() + runOut(), (out_ / "no_sequence").string());
   expectError("info " + (out_ / "no_sequence").string(), (out_ / "no_sequence").string());
   expectError("eval --gt " + missing + " --est " + missing, missing);
+  expectError("convert " + (out_ / "no_sequence").string() + " --out " + (out_ / "x.h5").string(),
+              (out_ / "no_sequence").string());
+  const std::string no_dir = (out_ / "no_dir" / "x.h5").string();
+  expectError("convert " + esim() + " --out " + no_dir, "cannot create the HDF5 file");
+  EXPECT_FALSE(fs::exists(no_dir));
 }
 
 TEST_F(CliErrors, TrackNeedsADepthSource) {
