@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "io/output_file.hpp"
+#include "recording_options.hpp"
 #include "sim/writer.hpp"
 #include "system/lens_calibration.hpp"
 #include "system/odometry.hpp"
@@ -20,15 +21,17 @@ namespace eds::app {
 namespace {
 
 struct CalibrateArgs {
-  std::string sequence, out = "calib_out", trajectory;
+  std::string sequence, out = "calib_out", trajectory, calib;
+  RecordingArgs recording;
   double max_sigma_px = 0.25;
   LensCalibrationConfig cfg;
 };
 
 void runCalibrate(CalibrateArgs& a) {
-  const Sequence seq(a.sequence);
+  Sequence seq(a.sequence, a.recording.options());
+  if (!a.calib.empty()) seq.setCamera(readCameraFile(a.calib), a.calib);
   if (!seq.hasFrames())
-    throw std::invalid_argument(a.sequence + ": lens calibration needs frames (images.txt)");
+    throw std::invalid_argument(a.sequence + ": lens calibration needs frames (images.txt or a recording's)");
   const std::filesystem::path out(a.out);
   requireWritableDir(out);
   Trajectory T_w_c;
@@ -111,8 +114,12 @@ void addCalibrateCommand(CLI::App& app) {
       "calibrate",
       "Refine the lens distortion from the sequence's frames (feature tracks + bundle adjustment)");
   auto a = std::make_shared<CalibrateArgs>();
-  cmd->add_option("sequence", a->sequence, "Sequence folder (needs frames and a calibration to start from)")
+  cmd->add_option("sequence", a->sequence,
+                  "Sequence folder or recording file (needs frames and a calibration to start from)")
       ->required();
+  cmd->add_option("--calib", a->calib, "The calibration to start from instead of the sequence's own")
+      ->check(CLI::ExistingFile);
+  addRecordingOptions(cmd, a->recording);
   cmd->add_option("--out", a->out, "Output folder")->capture_default_str();
   cmd->add_option("--trajectory", a->trajectory,
                   "Initial poses (TUM, e.g. trajectory_frames.txt of `eds run`); default: a frames-only run")

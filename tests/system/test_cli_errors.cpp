@@ -92,6 +92,10 @@ TEST_F(CliErrors, MissingFilesAreNamed) {
   expectError("eval --gt " + missing + " --est " + missing, missing);
   expectError("convert " + (out_ / "no_sequence").string() + " --out " + (out_ / "x.h5").string(),
               (out_ / "no_sequence").string());
+  const fs::path aedat = test::sharedDataDir() / "real/aedat4/davis346_indoor.aedat4";
+  if (fs::exists(aedat))  // a recording is a sequence for calibrate too; this one has no calibration
+    expectError("calibrate " + aedat.string() + " --out " + (out_ / "cal").string(),
+                "the recording holds no calibration: give one with --calib FILE");
   const std::string no_dir = (out_ / "no_dir" / "x.h5").string();
   expectError("convert " + esim() + " --out " + no_dir, "cannot create the HDF5 file");
   EXPECT_FALSE(fs::exists(no_dir));
