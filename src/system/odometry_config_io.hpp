@@ -29,4 +29,8 @@ void setOdometryParameter(OdometryConfig& cfg, const std::string& assignment);
 // Every parameter's dotted name, sorted.
 std::vector<std::string> odometryParameterNames();
 
+// Values no run can work with (negative waits, a recovery that could never find a pose...) and an
+// unknown sensor size: std::invalid_argument saying which.
+void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera);
+
 }  // namespace eds
