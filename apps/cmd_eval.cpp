@@ -35,6 +35,8 @@ void printReport(const EvalOptions& o, const eval::AteResult& r) {
   std::printf("alignment    : %s over %s, scale %.6f\n", eval::toString(r.alignment).c_str(),
               r.align_frames == -1 ? "all poses" : (std::to_string(r.align_frames) + " poses").c_str(),
               r.transform.s);
+  if (r.segment_transforms.size() > 1)
+    std::printf("map segments : %zu, each aligned on its own\n", r.segment_transforms.size());
   std::printf("matched pairs: %zu\n", r.pairs.size());
   std::printf("coverage     : %.1f %%\n", 100.0 * r.coverage);
   std::printf("  %-12s %10s %10s %10s %10s\n", "", "rmse", "mean", "median", "max");
@@ -76,7 +78,7 @@ void runEval(EvalOptions o) {
   }
   if (!o.json.empty()) eval::writeJson(o.json, j);
   // The whole estimate in the ground truth's frame and scale.
-  if (!o.aligned.empty()) writeTum(o.aligned, eval::applySim3(in.est, r.transform));
+  if (!o.aligned.empty()) writeTum(o.aligned, eval::alignedEstimate(in.est, r), r.segment_starts);
 }
 
 }  // namespace

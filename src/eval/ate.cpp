@@ -79,48 +79,88 @@ double computeCoverage(const Trajectory& est, const Trajectory& gt, const std::v
   return std::clamp(static_cast<double>(covered) / static_cast<double>(span_end - span_start), 0.0, 1.0);
 }
 
-AteResult evaluateAte(const Trajectory& est, const Trajectory& gt, const EvalConfig& cfg) {
+AteResult evaluateAte(const Trajectory& est, const Trajectory& gt, const EvalConfig& cfg,
+                      const std::vector<std::size_t>& segment_starts) {
   std::vector<MatchedPair> pairs = associate(est, gt, cfg.max_dt);
   if (cfg.window) pairs = filterByGtWindow(pairs, gt, *cfg.window);
-  return evaluateAtePairs(est, gt, std::move(pairs), cfg);
+  return evaluateAtePairs(est, gt, std::move(pairs), cfg, segment_starts);
 }
 
-AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vector<MatchedPair> pairs,
-                           const EvalConfig& cfg) {
-  AteResult r;
-  r.alignment = cfg.alignment;
-  r.align_frames = cfg.align_frames;
-  r.pairs = std::move(pairs);
-  if (r.pairs.empty()) throw std::invalid_argument("no estimated pose matches the ground truth");
+namespace {
 
-  const std::size_t n = r.pairs.size();
+// Aligns the pairs of one segment and appends their errors; false when the segment cannot be aligned
+// (too few or degenerate poses) and `may_skip`, else the alignment's exception propagates.
+bool alignSegment(const Trajectory& est, const Trajectory& gt, const std::vector<MatchedPair>& pairs,
+                  const EvalConfig& cfg, bool may_skip, AteResult& r, Sim3& transform) {
+  const std::size_t n = pairs.size();
   std::vector<Vec3> p_gt(n), p_est(n);
   std::vector<Quat> q_gt(n), q_est(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const SE3& G = gt[r.pairs[i].gt].T_w_c;
-    const SE3& E = est[r.pairs[i].est].T_w_c;
+    const SE3& G = gt[pairs[i].gt].T_w_c;
+    const SE3& E = est[pairs[i].est].T_w_c;
     p_gt[i] = G.translation();
     q_gt[i] = G.quaternion();
     p_est[i] = E.translation();
     q_est[i] = E.quaternion();
   }
-  r.transform = alignTrajectory(p_gt, q_gt, p_est, q_est, cfg.alignment, cfg.align_frames);
-
-  r.trans_errors.resize(n);
-  r.rot_errors_deg.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    r.trans_errors[i] = (p_gt[i] - r.transform.apply(p_est[i])).norm();
-    const Mat3 E = (r.transform.R * q_est[i].toRotationMatrix()) * q_gt[i].toRotationMatrix().transpose();
-    r.rot_errors_deg[i] = rotationAngle(E) * 180.0 / std::numbers::pi;
+  try {
+    transform = alignTrajectory(p_gt, q_gt, p_est, q_est, cfg.alignment, cfg.align_frames);
+  } catch (const std::invalid_argument&) {
+    if (may_skip) return false;
+    throw;
   }
+  for (std::size_t i = 0; i < n; ++i) {
+    r.trans_errors.push_back((p_gt[i] - transform.apply(p_est[i])).norm());
+    const Mat3 E = (transform.R * q_est[i].toRotationMatrix()) * q_gt[i].toRotationMatrix().transpose();
+    r.rot_errors_deg.push_back(rotationAngle(E) * 180.0 / std::numbers::pi);
+    r.pairs.push_back(pairs[i]);
+  }
+  return true;
+}
+
+}  // namespace
+
+AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vector<MatchedPair> pairs,
+                           const EvalConfig& cfg, const std::vector<std::size_t>& segment_starts) {
+  AteResult r;
+  r.alignment = cfg.alignment;
+  r.align_frames = cfg.align_frames;
+  r.segment_starts = segment_starts;
+  if (pairs.empty()) throw std::invalid_argument("no estimated pose matches the ground truth");
+  // Pairs are sorted by estimate index, so each segment's pairs are contiguous.
+  r.segment_transforms.assign(segment_starts.size() + 1, Sim3{});
+  bool first = true;
+  for (std::size_t k = 0, i = 0; k < r.segment_transforms.size(); ++k) {
+    const std::size_t end = k < segment_starts.size() ? segment_starts[k] : est.size();
+    std::vector<MatchedPair> seg;
+    for (; i < pairs.size() && pairs[i].est < end; ++i) seg.push_back(pairs[i]);
+    if (seg.empty()) continue;
+    if (alignSegment(est, gt, seg, cfg, !segment_starts.empty(), r, r.segment_transforms[k]) && first)
+      r.transform = r.segment_transforms[k], first = false;
+  }
+  if (r.pairs.empty())
+    throw std::invalid_argument("no map segment of the estimate has enough matched poses to align");
   r.trans = computeStats(r.trans_errors);
   r.rot = computeStats(r.rot_errors_deg);
   r.coverage = computeCoverage(est, gt, r.pairs, cfg.window, cfg.max_coverage_gap);
   return r;
 }
 
+Trajectory alignedEstimate(const Trajectory& est, const AteResult& r) {
+  if (r.segment_transforms.size() <= 1) return applySim3(est, r.transform);
+  Trajectory out;
+  for (std::size_t k = 0; k < r.segment_transforms.size(); ++k) {
+    const std::size_t a = k == 0 ? 0 : r.segment_starts[k - 1];
+    const std::size_t b = k < r.segment_starts.size() ? r.segment_starts[k] : est.size();
+    const Trajectory part = applySim3(Trajectory(est.begin() + a, est.begin() + b), r.segment_transforms[k]);
+    out.insert(out.end(), part.begin(), part.end());
+  }
+  return out;
+}
+
 EvalInputs readEvalInputs(const std::filesystem::path& gt_file, const std::filesystem::path& est_file) {
-  EvalInputs in{gt_file, est_file, readTum(gt_file, true), readTum(est_file, true)};
+  EvalInputs in{gt_file, est_file, readTum(gt_file, true), {}, {}};
+  in.est = readTum(est_file, true, &in.est_segment_starts);
   if (in.gt.empty()) throw InputError(gt_file.string(), "ground-truth trajectory is empty");
   if (in.est.empty()) throw InputError(est_file.string(), "estimated trajectory is empty");
   return in;
@@ -141,7 +181,7 @@ AteResult evaluateAte(const EvalInputs& in, const EvalConfig& cfg) {
                                    " poses matched with ground truth " + gt_name +
                                    " lies inside the time window");
   try {
-    return evaluateAtePairs(in.est, in.gt, std::move(pairs), cfg);
+    return evaluateAtePairs(in.est, in.gt, std::move(pairs), cfg, in.est_segment_starts);
   } catch (const std::invalid_argument& e) {
     throw InputError(est_name, std::string(e.what()) + " (ground truth " + gt_name + ")");
   }
@@ -159,7 +199,8 @@ nlohmann::json toJson(const AteResult& r) {
           {"coverage", r.coverage},
           {"alignment", toString(r.alignment)},
           {"align_frames", r.align_frames},
-          {"scale", r.transform.s}};
+          {"scale", r.transform.s},
+          {"segments", r.segment_transforms.size()}};
 }
 
 void writeJson(const std::filesystem::path& file, const AteResult& r) { writeJson(file, toJson(r)); }

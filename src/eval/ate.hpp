@@ -34,14 +34,22 @@ nlohmann::json toJson(const ErrorStats& s);
 struct AteResult {
   Alignment alignment = Alignment::kSim3;
   int align_frames = -1;
-  Sim3 transform;                      // gt = s R est + t
+  Sim3 transform;  // gt = s R est + t (the first segment's)
+  // An estimate of several map segments: each is aligned on its own. segment_starts: the estimate
+  // index where segments 1, 2, ... begin; segment_transforms: one per segment (the identity for a
+  // segment with too few matched poses to align, whose poses are then left out of the errors).
   std::vector<MatchedPair> pairs;      // after the window filter, sorted by estimate time
   std::vector<double> trans_errors;    // metres, one per pair
   std::vector<double> rot_errors_deg;  // degrees, one per pair
   ErrorStats trans;
   ErrorStats rot;
   double coverage = 0.0;  // fraction of the ground-truth time span covered, in [0, 1]
+  std::vector<std::size_t> segment_starts;
+  std::vector<Sim3> segment_transforms;
 };
+
+// The estimate in the ground truth's frame, each segment through its own transform.
+Trajectory alignedEstimate(const Trajectory& est, const AteResult& r);
 
 // Covered time / gt span (DESIGN.md section 5). The span runs from the first to the last gt stamp,
 // clipped to the window if given; covered time sums the intervals between consecutive matched
@@ -51,15 +59,18 @@ double computeCoverage(const Trajectory& est, const Trajectory& gt, const std::v
 
 // Associates, filters, aligns and measures. Throws std::invalid_argument when nothing matches or the
 // alignment is impossible; callers that know the file names turn that into an InputError.
-AteResult evaluateAte(const Trajectory& est, const Trajectory& gt, const EvalConfig& cfg);
+// `segment_starts`: where the estimate's map segments 1, 2, ... begin (none: one segment).
+AteResult evaluateAte(const Trajectory& est, const Trajectory& gt, const EvalConfig& cfg,
+                      const std::vector<std::size_t>& segment_starts = {});
 // Same on pairs already associated and filtered (sorted by estimate time).
 AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vector<MatchedPair> pairs,
-                           const EvalConfig& cfg);
+                           const EvalConfig& cfg, const std::vector<std::size_t>& segment_starts = {});
 
 // Both trajectories with the files they came from, so errors can name them.
 struct EvalInputs {
   std::filesystem::path gt_file, est_file;
   Trajectory gt, est;
+  std::vector<std::size_t> est_segment_starts;  // from the estimate's "# segment" lines
 };
 // Reads both TUM files (unsorted stamps allowed, as in the toolbox); empty files are InputErrors.
 EvalInputs readEvalInputs(const std::filesystem::path& gt_file, const std::filesystem::path& est_file);

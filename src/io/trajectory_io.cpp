@@ -1,5 +1,6 @@
 #include "io/trajectory_io.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,8 @@ const char* parseDouble(const char* p, const char* end, double& v) {
   return r.ptr;
 }
 
+constexpr std::string_view kSegmentMark = "# segment ";
+
 bool isCommentOrBlank(std::string_view line) {
   const char* p = text::skipSpaces(line.data(), line.data() + line.size());
   return p == line.data() + line.size() || *p == '#';
@@ -30,12 +33,16 @@ bool isCommentOrBlank(std::string_view line) {
 
 }  // namespace
 
-Trajectory readTum(const std::filesystem::path& file, bool allow_unsorted) {
+Trajectory readTum(const std::filesystem::path& file, bool allow_unsorted,
+                   std::vector<std::size_t>* segment_starts) {
   LineReader reader(file);
   Trajectory traj;
   std::string_view line;
   while (reader.next(line)) {
-    if (isCommentOrBlank(line)) continue;
+    if (isCommentOrBlank(line)) {
+      if (segment_starts && line.starts_with(kSegmentMark)) segment_starts->push_back(traj.size());
+      continue;
+    }
     const char* p = line.data();
     const char* end = p + line.size();
     const std::size_t ln = reader.lineNumber();
@@ -76,12 +83,18 @@ Trajectory readTum(const std::filesystem::path& file, bool allow_unsorted) {
   return traj;
 }
 
-void writeTum(const std::filesystem::path& file, const Trajectory& traj) {
+void writeTum(const std::filesystem::path& file, const Trajectory& traj,
+              const std::vector<std::size_t>& segment_starts) {
   OutputFile out(file);
   std::FILE* f = std::fopen(out.temporary().c_str(), "w");
   if (!f) throw InputError(file.string(), "cannot open for writing");
   std::fprintf(f, "# t tx ty tz qx qy qz qw (T_w_c, camera-to-world)\n");
-  for (const StampedPose& s : traj) {
+  std::size_t next_segment = 0;
+  for (std::size_t i = 0; i < traj.size(); ++i) {
+    for (; next_segment < segment_starts.size() && segment_starts[next_segment] <= i; ++next_segment)
+      std::fprintf(f, "%.*s%zu: a new map from here on (its own world frame and scale)\n",
+                   static_cast<int>(kSegmentMark.size()), kSegmentMark.data(), next_segment + 1);
+    const StampedPose& s = traj[i];
     const Vec3& p = s.T_w_c.translation();
     const Quat& q = s.T_w_c.quaternion();
     const long long sec = s.t / kNsPerSec;
@@ -91,6 +104,15 @@ void writeTum(const std::filesystem::path& file, const Trajectory& traj) {
   }
   if (std::fclose(f) != 0) throw InputError(file.string(), "write failed");
   out.commit();
+}
+
+std::vector<std::size_t> indicesFrom(const Trajectory& traj, const std::vector<TimeNs>& times) {
+  std::vector<std::size_t> out;
+  for (const TimeNs t : times)
+    out.push_back(std::lower_bound(traj.begin(), traj.end(), t,
+                                   [](const StampedPose& p, TimeNs u) { return p.t < u; }) -
+                  traj.begin());
+  return out;
 }
 
 }  // namespace eds

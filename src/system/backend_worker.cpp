@@ -12,10 +12,12 @@
 namespace eds {
 
 BackendWorker::BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping,
-                             const BackendConfig& backend, bool threaded, StageClock* caller_clock)
+                             const BackendConfig& backend, bool threaded, StageClock* caller_clock,
+                             int first_id)
     : cam_(pinhole),
       mcfg_(mapping),
       window_(pinhole, backend),
+      next_id_(first_id),
       threaded_(threaded),
       caller_clock_(caller_clock) {
   mcfg_.points.validate();
@@ -43,6 +45,8 @@ void BackendWorker::submit(KeyframeJob job) {
   }
   cv_.notify_all();
 }
+
+int BackendWorker::nextId() const { return next_id_; }
 
 bool BackendWorker::busy() const {
   std::lock_guard<std::mutex> lock(mutex_);

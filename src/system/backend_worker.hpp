@@ -59,7 +59,7 @@ class BackendWorker {
   // `caller_clock` (may be null): the submitting thread's stage clock; it is charged with the waits
   // for the worker and, without a thread, with the mapping and the bundle adjustment.
   BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping, const BackendConfig& backend,
-                bool threaded, StageClock* caller_clock = nullptr);
+                bool threaded, StageClock* caller_clock = nullptr, int first_id = 0);
   ~BackendWorker();
   BackendWorker(const BackendWorker&) = delete;
   BackendWorker& operator=(const BackendWorker&) = delete;
@@ -67,6 +67,8 @@ class BackendWorker {
   // Queues a keyframe (threaded) or processes it at once.
   void submit(KeyframeJob job);
   bool busy() const;
+  // The id the next keyframe submitted will get (read while no keyframe is queued or in work).
+  int nextId() const;
   void waitIdle();
   // Waits for the queued keyframes, then converges the window once more and retires it (the last
   // keyframes had fewer solves than the ones before them), on the worker's thread when it has one.

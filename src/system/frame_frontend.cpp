@@ -56,11 +56,11 @@ double medianInvDepth(const std::vector<KeyframePoint>& pts) {
 }  // namespace
 
 FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res,
-                             StageClock* clock)
+                             StageClock* clock, int first_keyframe_id)
     : cam_(cam),
       cfg_(cfg),
       res_(res),
-      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock),
+      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock, first_keyframe_id),
       tracker_(cam, cfg.frame_tracker) {}
 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,

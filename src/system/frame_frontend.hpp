@@ -21,9 +21,10 @@ Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const Came
 
 class FrameFrontend {
  public:
-  // `clock` (may be null): the calling thread's stage clock, passed on to the back-end worker.
+  // `clock` (may be null): the calling thread's stage clock, passed on to the back-end worker;
+  // `first_keyframe_id`: the id of its first keyframe (ids go on over map segments).
   FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, OdometryResult& res,
-                StageClock* clock = nullptr);
+                StageClock* clock = nullptr, int first_keyframe_id = 0);
 
   // Hands a keyframe to the back-end (mapping + BA). Returns the pose of the keyframe's frame: the
   // optimized one when the back-end ran at once (synchronous), else the given one.

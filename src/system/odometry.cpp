@@ -14,12 +14,9 @@
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
 #include "frontend/event_packets.hpp"
-#include "init/bootstrap.hpp"
-#include "system/event_frontend.hpp"
-#include "system/frame_frontend.hpp"
 #include "system/odometry_config_io.hpp"
+#include "system/odometry_core.hpp"
 #include "system/run_stats.hpp"
-#include "system/trajectory_smoothing.hpp"
 
 namespace eds {
 
@@ -30,307 +27,6 @@ double peakRssMb() {
   getrusage(RUSAGE_SELF, &ru);
   return ru.ru_maxrss / 1024.0;  // kB on Linux
 }
-
-// Each pose through its keyframe's final pose, and a keyframe's own frame at its final pose; a pose
-// without a keyframe (or whose keyframe the window never retired) stays as tracked.
-Trajectory refinedTrajectory(const Trajectory& traj, const std::vector<PoseAnchor>& anchors,
-                             const std::vector<RetiredKeyframe>& keyframes) {
-  std::unordered_map<int, const SE3*> by_id;
-  std::unordered_map<TimeNs, const SE3*> by_time;
-  for (const RetiredKeyframe& k : keyframes) by_id.emplace(k.id, &k.T_w_kf), by_time.emplace(k.t, &k.T_w_kf);
-  Trajectory out = traj;
-  for (std::size_t i = 0; i < out.size() && i < anchors.size(); ++i) {
-    if (const auto own = by_time.find(out[i].t); own != by_time.end())
-      out[i].T_w_c = *own->second;
-    else if (const auto kf = by_id.find(anchors[i].kf_id); kf != by_id.end())
-      out[i].T_w_c = *kf->second * anchors[i].T_kf_c;
-  }
-  return out;
-}
-
-}  // namespace
-
-namespace {
-
-// The pipeline: frames through the bootstrap and the frame front-end, event frames (when used) through
-// the event front-end, each given in time order.
-class Core {
- public:
-  Core(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res, StageClock& clock)
-      : cfg_(cfg),
-        res_(res),
-        clock_(clock),
-        und_(camera),
-        quality_(cfg.frame_quality),
-        odo_(und_.pinhole(), cfg, res, &clock),
-        boot_(und_.pinhole(), cfg.bootstrap),
-        events_(und_.pinhole(), cfg.events) {}
-
-  // A raw 8-bit frame.
-  void frame(TimeNs t, const cv::Mat& raw) {
-    ++res_.frames_in;
-    std::optional<ScopedStage> stage(std::in_place, &clock_, Stage::kFramePreparation);
-    if (std::string why = quality_.check(t, raw); !why.empty()) {
-      ++res_.frames_rejected;
-      ++inputs_without_pose_;
-      res_.failures.push_back({t, "frame not used: " + why});
-      return;
-    }
-    cv::Mat img;
-    und_.undistortImage(raw).convertTo(img, CV_32F, 1.0 / 255.0);
-    last_t_ = t;
-    if (!res_.initialized) {
-      stage.emplace(&clock_, Stage::kBootstrap);
-      // The events' pose at this frame, tracked against the bootstrap's reference, seeds its alignment.
-      SE3 hint;
-      const bool has_hint = has_boot_event_ && std::llabs(t - boot_event_.t) < fromSeconds(0.05);
-      if (has_hint) hint = boot_event_.T_w_c.inverse();
-      if (boot_.add(t, img, has_hint ? &hint : nullptr))
-        initialize(t, img);
-      else
-        syncBootstrapEvents(t);
-      return;
-    }
-    // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
-    stage.emplace(&clock_, Stage::kFrameTracking);
-    std::optional<SE3> found;
-    if (cfg_.recovery.enabled && !recover(t, img, found)) return;
-    const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
-    const SE3 T_w_f = odo_.track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
-    res_.frames.push_back({t, T_w_f});
-    res_.frame_anchors.push_back({odo_.referenceId(), odo_.T_w_kf().inverse() * T_w_f});
-    if (odo_.lastTrackOk()) {
-      events_.correct(t, T_w_f);
-      last_good_t_ = t;
-      failed_in_row_ = 0;
-      inputs_without_pose_ = 0;
-    } else {
-      ++inputs_without_pose_;
-      if (++failed_in_row_ >= cfg_.recovery.failed_frames && cfg_.recovery.enabled)
-        loseTrack(t, std::to_string(failed_in_row_) + " frame alignments failed in a row");
-    }
-    syncReference();
-  }
-
-  void eventFrame(const EventFrame& ef) {
-    const ScopedStage stage(&clock_, Stage::kEventTracking);
-    ++res_.event_frames;
-    if (!res_.initialized) {
-      // Kept until the map exists, then tracked (poses from the bootstrap's reference frame on: older
-      // ones are dropped at once, which bounds the buffer by the bootstrap's span).
-      pruneBuffered();
-      buffered_.push_back({ef.t, ef.t_first, ef.t_last, ef.delta.clone()});
-      if (boot_events_ && boot_events_->hasReference()) {
-        if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
-          boot_event_ = {ef.t, *T};
-          has_boot_event_ = true;
-        }
-      }
-      return;
-    }
-    if (lost_) {
-      res_.failures.push_back({ef.t, "event frame: the track is lost; waiting for a frame to relocalize"});
-      return;
-    }
-    odo_.adoptReference(false);
-    syncReference();
-    trackEvents(ef, nullptr);
-  }
-
-  TimeNs lastTime() const { return last_t_; }
-  FrameFrontend& frontend() { return odo_; }
-  const Undistorter& undistorter() const { return und_; }
-
- private:
-  void initialize(TimeNs t, const cv::Mat& img) {
-    res_.initialized = true;
-    res_.init_t = t;
-    last_good_t_ = t;
-    res_.init_frames = static_cast<int>(boot_.frames().size());
-    res_.init_restarts = boot_.restarts();
-    // Keyframe 0 is the reference with the bootstrap's depths; keyframe 1 the frame that completed it.
-    const Keyframe& ref = boot_.reference();
-    odo_.addKeyframe(ref.t, ref.image, SE3(), 0.0, 0.0, ref.points);
-    const BootstrapFrame& last = boot_.frames().back();
-    Trajectory boot_traj;
-    for (const BootstrapFrame& f : boot_.frames()) boot_traj.push_back({f.t, f.T_ref_c});
-    // The bootstrap's poses are relative to its reference, keyframe 0 (at the identity).
-    for (std::size_t k = 0; k + 1 < boot_traj.size(); ++k) {
-      res_.frames.push_back(boot_traj[k]);
-      res_.frame_anchors.push_back({0, boot_traj[k].T_w_c});
-    }
-    odo_.setLast(boot_traj[boot_traj.size() - 2].T_w_c);
-    odo_.setLastBrightness(last.a, last.b);
-    const SE3 T_w_f = odo_.addKeyframe(t, img, last.T_ref_c, last.a, last.b);
-    odo_.setLast(T_w_f);
-    res_.frames.push_back({t, T_w_f});
-    res_.frame_anchors.push_back({0, T_w_f});
-    res_.tracked += boot_traj.size();
-    if (!cfg_.use_events) return;
-    // The event frames that arrived during the bootstrap, against the bootstrap's reference keyframe
-    // (the first keyframe), each from the bootstrap's pose at its time.
-    events_.setReference(ref, SE3());
-    for (EventFrame& ef : buffered_) {
-      if (ef.t < boot_traj.front().t) continue;
-      const SE3 prior = poseAt(boot_traj, ef.t);
-      // The frames bracket each of these event frames: a result far from their interpolation (more
-      // than half the motion between the two frames, plus a margin) is a wrong minimum, not motion.
-      const auto it = std::lower_bound(boot_traj.begin(), boot_traj.end(), ef.t,
-                                       [](const StampedPose& p, TimeNs t) { return p.t < t; });
-      const SE3& A = it == boot_traj.begin() ? it->T_w_c : (it - 1)->T_w_c;
-      const SE3& B = it == boot_traj.end() ? (it - 1)->T_w_c : it->T_w_c;
-      const SE3 AB = A.inverse() * B;
-      const double max_t = 0.5 * AB.translation().norm() + cfg_.buffered_gate_translation;
-      const double max_r = 0.5 * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
-      const bool between = it != boot_traj.begin() && it != boot_traj.end();
-      trackEvents(
-          ef, &prior,
-          [&](const SE3& T) {
-            const SE3 d = prior.inverse() * T;
-            return d.translation().norm() <= max_t && d.so3().angle() <= max_r;
-          },
-          between ? std::make_pair(&*(it - 1), &*it) : std::pair<const StampedPose*, const StampedPose*>{});
-    }
-    odo_.adoptReference(true);
-    syncReference();
-    buffered_.clear();
-    // The bootstrap's last two frames start the motion prior (and the tracking) of the live events.
-    const std::size_t n = res_.frames.size();
-    if (n >= 2) events_.correct(res_.frames[n - 2].t, res_.frames[n - 2].T_w_c);
-    if (n >= 1) events_.correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
-  }
-
-  // The track is lost after a gap with no pose from frames or events; while it is, each usable frame
-  // is relocalized. False: still lost (this frame gives no pose). `found`: the relocalized pose.
-  bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found) {
-    // A gap alone is no loss (frames may be seconds apart); inputs that gave no pose over it are.
-    if (!lost_ && inputs_without_pose_ > 0 && t - last_good_t_ > fromSeconds(cfg_.recovery.gap_s))
-      loseTrack(last_good_t_, "no pose from frames or events for " +
-                                  std::to_string(std::lround(1000 * toSeconds(t - last_good_t_))) + " ms");
-    if (!lost_) return true;
-    TrackLoss& loss = res_.losses.back();
-    ++loss.attempts;
-    std::string how;
-    found = odo_.relocalize(img, how);
-    if (!found) {
-      res_.failures.push_back({t, "track lost, relocalization: " + how});
-      return false;
-    }
-    lost_ = false;
-    failed_in_row_ = inputs_without_pose_ = 0;
-    loss.t_recovered = t;
-    loss.recovery = how;
-    // The events start again from the frame's pose, at rest: their pose from before the loss is no prior.
-    syncReference();
-    events_.restartFrom(*found);
-    has_event_pose_ = false;
-    return true;
-  }
-
-  void loseTrack(TimeNs t_last_pose, const std::string& cause) {
-    lost_ = true;
-    res_.losses.push_back({t_last_pose, -1, cause, "", 0});
-    res_.failures.push_back({t_last_pose, "track lost: " + cause});
-  }
-
-  void pruneBuffered() {
-    const std::vector<BootstrapFrame>& bf = boot_.frames();
-    const TimeNs t0 = boot_.hasReference() && !bf.empty() ? bf.front().t : std::numeric_limits<TimeNs>::max();
-    std::erase_if(buffered_, [t0](const EventFrame& b) { return b.t < t0; });
-  }
-
-  // During the bootstrap the events track against its reference (its current inverse depths; 1 at
-  // first): their pose at the next frame is the bootstrap's hint (frames far apart: a constant-velocity
-  // guess is too far off). A new reference (a restart) is a new world: the tracking starts again.
-  void syncBootstrapEvents(TimeNs t) {
-    if (!cfg_.use_events || !boot_.hasReference()) return;
-    const Keyframe& ref = boot_.reference();
-    if (!boot_events_ || ref.t != boot_ref_t_ || boot_.restarts() != boot_restarts_) {
-      boot_events_.emplace(und_.pinhole(), cfg_.events);
-      boot_ref_t_ = ref.t, boot_restarts_ = boot_.restarts();
-      has_boot_event_ = false;
-    }
-    boot_events_->setReference(ref, SE3());
-    const BootstrapFrame& last = boot_.frames().back();
-    if (last.t == t) boot_events_->correct(t, last.T_ref_c);
-  }
-
-  void syncReference() {
-    if (!cfg_.use_events || odo_.referenceId() == event_ref_id_ || odo_.reference().points.empty()) return;
-    events_.setReference(odo_.reference(), odo_.T_w_kf());
-    event_ref_id_ = odo_.referenceId();
-  }
-
-  // `bracket`: the frames before and after a buffered event frame (its start and motion prior).
-  void trackEvents(const EventFrame& ef, const SE3* prior,
-                   const std::function<bool(const SE3&)>& plausible = nullptr,
-                   const std::pair<const StampedPose*, const StampedPose*>& bracket = {}) {
-    const ScopedStage stage(&clock_, Stage::kEventTracking);
-    const auto t0 = Clock::now();
-    std::string why;
-    const std::optional<SE3> T = bracket.first
-                                     ? events_.trackBetween(ef, bracket.first->t, bracket.first->T_w_c,
-                                                            bracket.second->t, bracket.second->T_w_c, &why)
-                                     : events_.track(ef, prior, &why);
-    res_.event_track_ms.push_back(msSince(t0));
-    if (!T) {
-      res_.failures.push_back({ef.t, "event frame: " + why});
-      ++inputs_without_pose_;
-      return;
-    }
-    if (plausible && !plausible(*T)) {
-      res_.failures.push_back({ef.t, "event frame during the bootstrap: too far from the frames' poses"});
-      return;
-    }
-    ++res_.events_tracked;
-    last_good_t_ = ef.t;
-    inputs_without_pose_ = 0;
-    last_event_ = {ef.t, *T};
-    has_event_pose_ = true;
-    res_.events.push_back(last_event_);
-    res_.event_last_t.push_back(ef.t_last);
-    res_.event_anchors.push_back({events_.referenceId(), events_.T_w_kf().inverse() * *T});
-    if (events_.referenceId() != snapshot_ref_id_) snapshot(ef);
-  }
-
-  // Every stride-th keyframe's first event frame; at kMax, every other one goes and the stride doubles.
-  void snapshot(const EventFrame& ef) {
-    snapshot_ref_id_ = events_.referenceId();
-    if (snapshot_refs_++ % snapshot_stride_ != 0) return;
-    auto& shots = res_.event_snapshots;
-    shots.push_back(
-        {ef.t, snapshot_ref_id_, events_.lastCorrelation(), ef.delta.clone(), events_.lastPrediction()});
-    if (shots.size() < EventFrameSnapshot::kMax) return;
-    for (std::size_t i = 1; 2 * i < shots.size(); ++i) shots[i] = std::move(shots[2 * i]);
-    shots.resize((shots.size() + 1) / 2);
-    snapshot_stride_ *= 2;
-  }
-
-  const OdometryConfig& cfg_;
-  OdometryResult& res_;
-  StageClock& clock_;
-  Undistorter und_;
-  FrameQualityGate quality_;
-  FrameFrontend odo_;
-  Bootstrap boot_;
-  EventFrontend events_;
-  int event_ref_id_ = -1;
-  std::vector<EventFrame> buffered_;
-  std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
-  TimeNs boot_ref_t_ = -1;
-  int boot_restarts_ = -1;
-  StampedPose boot_event_;
-  bool has_boot_event_ = false;
-  StampedPose last_event_;
-  bool has_event_pose_ = false;
-  TimeNs last_t_ = 0;
-  TimeNs last_good_t_ = 0;  // of the last pose from a frame or event frame
-  bool lost_ = false;
-  int failed_in_row_ = 0;        // frame alignments
-  int inputs_without_pose_ = 0;  // frames and event frames since the last pose
-  int snapshot_ref_id_ = -1;
-  std::size_t snapshot_refs_ = 0, snapshot_stride_ = 1;
-};
 
 }  // namespace
 
@@ -411,30 +107,13 @@ class Odometry::Impl {
     finished_ = true;
     buildPackets(true);
     dispatch(true);
-    FrameFrontend& odo = core_.frontend();
-    odo.worker().finish();
+    core_.finish();
     const ScopedStage results(&clock_, Stage::kResults);
-    const SlidingWindow& window = odo.worker().window();
-    const BackendTimings& bt = odo.worker().timings();
-    res_.mapping_ms = bt.mapping_ms;
-    res_.ba_ms = bt.ba_ms;
-    res_.window_points = bt.window_points;
-    res_.keyframe_maps = window.retiredKeyframes();
-    std::sort(res_.keyframe_maps.begin(), res_.keyframe_maps.end(),
-              [](const auto& a, const auto& b) { return a.t < b.t; });
-    for (const RetiredKeyframe& k : res_.keyframe_maps) res_.keyframes.push_back({k.t, k.T_w_kf});
-    res_.pinhole = core_.undistorter().pinhole();
-    res_.map = window.retiredPoints();
-    res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, window.retiredKeyframes());
-    res_.events_refined =
-        smoothPositions(refinedTrajectory(res_.events, res_.event_anchors, window.retiredKeyframes()),
-                        cfg_.event_smoothing_s);
     TimeNs last_t = core_.lastTime();
     if (!res_.events.empty()) last_t = std::max(last_t, res_.events.back().t);
     res_.sequence_s = has_first_ ? toSeconds(last_t - res_.first_t) : 0.0;
     res_.peak_rss_mb = peakRssMb();
     res_.stages_s = clock_.seconds();
-    if (cfg_.threaded_backend) res_.backend_stages_s = odo.worker().threadStageSeconds();
     res_.wall_s = std::chrono::duration<double>(Clock::now() - wall0_).count();
     return res_;
   }
@@ -562,7 +241,7 @@ class Odometry::Impl {
   OdometryListener* listener_;
   OdometryResult res_;
   StageClock clock_{Stage::kInput};  // the calling thread's
-  Core core_;
+  OdometryCore core_;
   EventFrameBuilder builder_;
   std::size_t n_;
   PacketStarts starts_;

@@ -73,9 +73,14 @@ struct RecoveryConfig {
   int failed_frames = 3;
   double max_refinement = 0.1;  // the alignment may move the features' pose this fraction of the depth
   RelocalizerConfig relocalizer;
+  // Relocalization failed on this many usable frames and for this long since the loss: a new map
+  // (segment) starts with a new bootstrap.
+  int new_map_after_frames = 3;
+  double new_map_after_s = 1.0;
 };
 
-EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, relocalizer)
+EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, relocalizer, new_map_after_frames,
+           new_map_after_s)
 
 struct OdometryConfig {
   StreamConfig stream;
@@ -134,6 +139,15 @@ struct TrackLoss {
   int attempts = 0;  // frames tried
 };
 
+// A map of its own, with its own world frame and scale: the first from the first frame, a new one each
+// time relocalization kept failing. A pose belongs to the segment whose span holds its time.
+struct MapSegment {
+  int id = 0;
+  TimeNs t_start = 0;  // its first frame (the bootstrap's first try)
+  TimeNs t_init = -1;  // its map was initialized (-1: never)
+  std::string cause;   // why the segment before it was left
+};
+
 // An event frame next to the event generation model's prediction at its tracked pose (both on the
 // undistorted grid, unit norm), for reports: the first event frame tracked against a keyframe, for
 // keyframes spread evenly over the run (at most kMax of them, whatever its length).
@@ -178,6 +192,7 @@ struct OdometryResult {
   int init_frames = 0, init_restarts = 0;
   std::vector<OdometryFailure> failures;
   std::vector<TrackLoss> losses;
+  std::vector<MapSegment> segments;  // in time order; one unless the track was lost for good
   std::vector<TimeNs> event_last_t;  // per event pose: the time of its event frame's last event
   std::vector<double> track_ms, mapping_ms, ba_ms;  // per frame; per keyframe (both)
   std::vector<int> window_points;                   // per keyframe, after the solve
@@ -197,6 +212,9 @@ struct OdometryResult {
     std::size_t events_skipped = 0, frames_skipped = 0;
   } realtime;
 };
+
+// The start times of map segments 1, 2, ... (segment 0 holds everything before the first).
+std::vector<TimeNs> segmentStartTimes(const OdometryResult& r);
 
 // A keyframe as the back-end published it (mapped and optimized once; later solves move it further).
 struct KeyframeUpdate {

@@ -206,13 +206,17 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   std::filesystem::create_directories(dir);
   // The main files hold each pose through its keyframe's final pose (as DSO's results); *_live.txt the
   // poses as they were tracked, what a live user had at the time.
-  writeTum(dir / "trajectory_frames.txt", r.frames_refined);
-  writeTum(dir / "trajectory_frames_live.txt", r.frames);
+  // A line "# segment K" before the first pose of each new map segment.
+  const auto tum = [&](const char* name, const Trajectory& traj) {
+    writeTum(dir / name, traj, indicesFrom(traj, segmentStartTimes(r)));
+  };
+  tum("trajectory_frames.txt", r.frames_refined);
+  tum("trajectory_frames_live.txt", r.frames);
   if (cfg.use_events) {
-    writeTum(dir / "trajectory_events.txt", r.events_refined);
-    writeTum(dir / "trajectory_events_live.txt", r.events);
+    tum("trajectory_events.txt", r.events_refined);
+    tum("trajectory_events_live.txt", r.events);
   }
-  writeTum(dir / "keyframes.txt", r.keyframes);
+  tum("keyframes.txt", r.keyframes);
   writeReferenceKeyframes(dir, r.pinhole, r.keyframe_maps);
   writeEventSnapshots(dir, r.event_snapshots);
   if (!inputs.groundtruth.empty()) writeTum(dir / "groundtruth.txt", inputs.groundtruth);
@@ -282,6 +286,13 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
          {"recovery", l.recovery},
          {"frames_tried", l.attempts}});
   j["losses"] = losses;
+  nlohmann::json segments = nlohmann::json::array();
+  for (const MapSegment& s : r.segments)
+    segments.push_back({{"id", s.id},
+                        {"t_start", toSeconds(s.t_start)},
+                        {"t_init", s.t_init >= 0 ? nlohmann::json(toSeconds(s.t_init)) : nullptr},
+                        {"cause", s.cause}});
+  j["segments"] = segments;
   j["config"] = {{"frame_rate", cfg.frame_rate},
                  {"start_s", cfg.start_s},
                  {"duration_s", cfg.duration_s},

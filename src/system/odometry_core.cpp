@@ -1,0 +1,370 @@
+#include "system/odometry_core.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <unordered_map>
+
+#include "system/run_stats.hpp"
+#include "system/trajectory_smoothing.hpp"
+
+namespace eds {
+
+namespace {
+
+// Each pose through its keyframe's final pose, and a keyframe's own frame at its final pose; a pose
+// without a keyframe (or whose keyframe the window never retired) stays as tracked.
+Trajectory refinedTrajectory(const Trajectory& traj, const std::vector<PoseAnchor>& anchors,
+                             const std::vector<RetiredKeyframe>& keyframes) {
+  std::unordered_map<int, const SE3*> by_id;
+  std::unordered_map<TimeNs, const SE3*> by_time;
+  for (const RetiredKeyframe& k : keyframes) by_id.emplace(k.id, &k.T_w_kf), by_time.emplace(k.t, &k.T_w_kf);
+  Trajectory out = traj;
+  for (std::size_t i = 0; i < out.size() && i < anchors.size(); ++i) {
+    if (const auto own = by_time.find(out[i].t); own != by_time.end())
+      out[i].T_w_c = *own->second;
+    else if (const auto kf = by_id.find(anchors[i].kf_id); kf != by_id.end())
+      out[i].T_w_c = *kf->second * anchors[i].T_kf_c;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<TimeNs> segmentStartTimes(const OdometryResult& r) {
+  std::vector<TimeNs> out;
+  for (std::size_t k = 1; k < r.segments.size(); ++k) out.push_back(r.segments[k].t_start);
+  return out;
+}
+
+OdometryCore::OdometryCore(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res,
+                           StageClock& clock)
+    : cfg_(cfg),
+      res_(res),
+      clock_(clock),
+      und_(camera),
+      quality_(cfg.frame_quality),
+      odo_(std::make_unique<FrameFrontend>(und_.pinhole(), cfg, res, &clock)),
+      boot_(std::make_unique<Bootstrap>(und_.pinhole(), cfg.bootstrap)),
+      events_(std::make_unique<EventFrontend>(und_.pinhole(), cfg.events)) {}
+
+void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
+  ++res_.frames_in;
+  const ScopedStage stage(&clock_, Stage::kFramePreparation);
+  if (std::string why = quality_.check(t, raw); !why.empty()) {
+    ++res_.frames_rejected;
+    ++inputs_without_pose_;
+    res_.failures.push_back({t, "frame not used: " + why});
+    return;
+  }
+  cv::Mat img;
+  und_.undistortImage(raw).convertTo(img, CV_32F, 1.0 / 255.0);
+  last_t_ = t;
+  if (res_.segments.empty()) res_.segments.push_back({0, t, -1, ""});
+  if (!initialized_)
+    bootstrapFrame(t, img);
+  else
+    trackFrame(t, img);
+}
+
+void OdometryCore::bootstrapFrame(TimeNs t, const cv::Mat& img) {
+  const ScopedStage stage(&clock_, Stage::kBootstrap);
+  // The events' pose at this frame, tracked against the bootstrap's reference, seeds its alignment.
+  SE3 hint;
+  const bool has_hint = has_boot_event_ && std::llabs(t - boot_event_.t) < fromSeconds(0.05);
+  if (has_hint) hint = boot_event_.T_w_c.inverse();
+  if (boot_->add(t, img, has_hint ? &hint : nullptr))
+    initialize(t, img);
+  else
+    syncBootstrapEvents(t);
+}
+
+void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
+  const ScopedStage stage(&clock_, Stage::kFrameTracking);
+  std::optional<SE3> found;
+  if (cfg_.recovery.enabled && !recover(t, img, found)) {
+    if (!initialized_) bootstrapFrame(t, img);  // a new segment starts with this frame
+    return;
+  }
+  // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
+  const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
+  const SE3 T_w_f = odo_->track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
+  res_.frames.push_back({t, T_w_f});
+  res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * T_w_f});
+  if (odo_->lastTrackOk()) {
+    events_->correct(t, T_w_f);
+    last_good_t_ = t;
+    failed_in_row_ = 0;
+    inputs_without_pose_ = 0;
+  } else {
+    ++inputs_without_pose_;
+    if (++failed_in_row_ >= cfg_.recovery.failed_frames && cfg_.recovery.enabled)
+      loseTrack(t, std::to_string(failed_in_row_) + " frame alignments failed in a row");
+  }
+  syncReference();
+}
+
+void OdometryCore::eventFrame(const EventFrame& ef) {
+  const ScopedStage stage(&clock_, Stage::kEventTracking);
+  ++res_.event_frames;
+  if (!initialized_) {
+    // Kept until the map exists, then tracked (poses from the bootstrap's reference frame on: older
+    // ones are dropped at once, which bounds the buffer by the bootstrap's span).
+    pruneBuffered();
+    buffered_.push_back({ef.t, ef.t_first, ef.t_last, ef.delta.clone()});
+    if (boot_events_ && boot_events_->hasReference()) {
+      if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
+        boot_event_ = {ef.t, *T};
+        has_boot_event_ = true;
+      }
+    }
+    return;
+  }
+  if (lost_) {
+    res_.failures.push_back({ef.t, "event frame: the track is lost; waiting for a frame to relocalize"});
+    return;
+  }
+  odo_->adoptReference(false);
+  syncReference();
+  trackEvents(ef, nullptr);
+}
+
+void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
+  initialized_ = true;
+  last_good_t_ = t;
+  MapSegment& segment = res_.segments.back();
+  segment.t_init = t;
+  if (!res_.initialized) {
+    res_.initialized = true;
+    res_.init_t = t;
+    res_.init_frames = static_cast<int>(boot_->frames().size());
+    res_.init_restarts = boot_->restarts();
+  } else if (!res_.losses.empty() && res_.losses.back().t_recovered < 0) {
+    TrackLoss& loss = res_.losses.back();
+    loss.t_recovered = t;
+    loss.recovery = "new map (segment " + std::to_string(segment.id) + ")";
+  }
+  // The reference keyframe holds the bootstrap's depths; the next one is the frame that completed it.
+  const Keyframe& ref = boot_->reference();
+  const int ref_id = odo_->worker().nextId();
+  odo_->addKeyframe(ref.t, ref.image, SE3(), 0.0, 0.0, ref.points);
+  const BootstrapFrame& last = boot_->frames().back();
+  Trajectory boot_traj;
+  for (const BootstrapFrame& f : boot_->frames()) boot_traj.push_back({f.t, f.T_ref_c});
+  // The bootstrap's poses are relative to its reference keyframe (at the identity).
+  for (std::size_t k = 0; k + 1 < boot_traj.size(); ++k) {
+    res_.frames.push_back(boot_traj[k]);
+    res_.frame_anchors.push_back({ref_id, boot_traj[k].T_w_c});
+  }
+  odo_->setLast(boot_traj[boot_traj.size() - 2].T_w_c);
+  odo_->setLastBrightness(last.a, last.b);
+  const SE3 T_w_f = odo_->addKeyframe(t, img, last.T_ref_c, last.a, last.b);
+  odo_->setLast(T_w_f);
+  res_.frames.push_back({t, T_w_f});
+  res_.frame_anchors.push_back({ref_id, T_w_f});
+  res_.tracked += boot_traj.size();
+  if (!cfg_.use_events) return;
+  events_->setReference(ref, SE3());
+  trackBufferedEvents(boot_traj);
+  odo_->adoptReference(true);
+  syncReference();
+  buffered_.clear();
+  // The bootstrap's last two frames start the motion prior (and the tracking) of the live events.
+  const std::size_t n = res_.frames.size();
+  if (n >= 2) events_->correct(res_.frames[n - 2].t, res_.frames[n - 2].T_w_c);
+  if (n >= 1) events_->correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
+}
+
+// The event frames that arrived during the bootstrap, against its reference keyframe, each from the
+// bootstrap's pose at its time.
+void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
+  for (EventFrame& ef : buffered_) {
+    if (ef.t < boot_traj.front().t) continue;
+    const SE3 prior = poseAt(boot_traj, ef.t);
+    // The frames bracket each of these event frames: a result far from their interpolation (more
+    // than half the motion between the two frames, plus a margin) is a wrong minimum, not motion.
+    const auto it = std::lower_bound(boot_traj.begin(), boot_traj.end(), ef.t,
+                                     [](const StampedPose& p, TimeNs t) { return p.t < t; });
+    const SE3& A = it == boot_traj.begin() ? it->T_w_c : (it - 1)->T_w_c;
+    const SE3& B = it == boot_traj.end() ? (it - 1)->T_w_c : it->T_w_c;
+    const SE3 AB = A.inverse() * B;
+    const double max_t = 0.5 * AB.translation().norm() + cfg_.buffered_gate_translation;
+    const double max_r = 0.5 * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
+    const bool between = it != boot_traj.begin() && it != boot_traj.end();
+    trackEvents(
+        ef, &prior,
+        [&](const SE3& T) {
+          const SE3 d = prior.inverse() * T;
+          return d.translation().norm() <= max_t && d.so3().angle() <= max_r;
+        },
+        between ? std::make_pair(&*(it - 1), &*it) : std::pair<const StampedPose*, const StampedPose*>{});
+  }
+}
+
+// The track is lost after a gap with no pose from frames or events; while it is, each usable frame
+// is relocalized. False: still lost (this frame gives no pose). `found`: the relocalized pose.
+bool OdometryCore::recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found) {
+  // A gap alone is no loss (frames may be seconds apart); inputs that gave no pose over it are.
+  if (!lost_ && inputs_without_pose_ > 0 && t - last_good_t_ > fromSeconds(cfg_.recovery.gap_s))
+    loseTrack(last_good_t_, "no pose from frames or events for " +
+                                std::to_string(std::lround(1000 * toSeconds(t - last_good_t_))) + " ms");
+  if (!lost_) return true;
+  TrackLoss& loss = res_.losses.back();
+  ++loss.attempts;
+  std::string how;
+  found = odo_->relocalize(img, how);
+  if (!found) {
+    res_.failures.push_back({t, "track lost, relocalization: " + how});
+    // The map is no help any more: a new one starts from this frame.
+    if (loss.attempts >= cfg_.recovery.new_map_after_frames &&
+        t - loss.t_lost >= fromSeconds(cfg_.recovery.new_map_after_s))
+      startSegment(t);
+    return false;
+  }
+  lost_ = false;
+  failed_in_row_ = inputs_without_pose_ = 0;
+  loss.t_recovered = t;
+  loss.recovery = how;
+  // The events start again from the frame's pose, at rest: their pose from before the loss is no prior.
+  syncReference();
+  events_->restartFrom(*found);
+  has_event_pose_ = false;
+  return true;
+}
+
+void OdometryCore::loseTrack(TimeNs t_last_pose, const std::string& cause) {
+  lost_ = true;
+  res_.losses.push_back({t_last_pose, -1, cause, "", 0});
+  res_.failures.push_back({t_last_pose, "track lost: " + cause});
+}
+
+// A new map segment from `t` on: the old segment's back-end finishes (its keyframes and points are
+// final), and the bootstrap, the trackers and the back-end start anew, keyframe ids going on.
+void OdometryCore::startSegment(TimeNs t) {
+  const ScopedStage stage(&clock_, Stage::kBootstrap);
+  retireSegment();
+  const int next_id = odo_->worker().nextId();
+  odo_ = std::make_unique<FrameFrontend>(und_.pinhole(), cfg_, res_, &clock_, next_id);
+  boot_ = std::make_unique<Bootstrap>(und_.pinhole(), cfg_.bootstrap);
+  events_ = std::make_unique<EventFrontend>(und_.pinhole(), cfg_.events);
+  boot_events_.reset();
+  buffered_.clear();
+  initialized_ = lost_ = has_boot_event_ = has_event_pose_ = false;
+  boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_id_ = -1;
+  failed_in_row_ = inputs_without_pose_ = 0;
+  res_.segments.push_back({static_cast<int>(res_.segments.size()), t, -1, res_.losses.back().cause});
+  res_.failures.push_back({t, "track lost: relocalization keeps failing; a new map (segment " +
+                                  std::to_string(res_.segments.back().id) + ") starts"});
+}
+
+void OdometryCore::retireSegment() {
+  BackendWorker& worker = odo_->worker();
+  worker.finish();
+  const SlidingWindow& window = worker.window();
+  retired_keyframes_.insert(retired_keyframes_.end(), window.retiredKeyframes().begin(),
+                            window.retiredKeyframes().end());
+  retired_points_.insert(retired_points_.end(), window.retiredPoints().begin(), window.retiredPoints().end());
+  const BackendTimings& bt = worker.timings();
+  auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+  append(retired_timings_.mapping_ms, bt.mapping_ms);
+  append(retired_timings_.ba_ms, bt.ba_ms);
+  append(retired_timings_.window_points, bt.window_points);
+  if (cfg_.threaded_backend) {
+    const StageSeconds s = worker.threadStageSeconds();
+    for (std::size_t i = 0; i < s.size(); ++i) retired_backend_stages_[i] += s[i];
+  }
+}
+
+void OdometryCore::finish() {
+  retireSegment();
+  res_.mapping_ms = retired_timings_.mapping_ms;
+  res_.ba_ms = retired_timings_.ba_ms;
+  res_.window_points = retired_timings_.window_points;
+  res_.backend_stages_s = retired_backend_stages_;
+  res_.keyframe_maps = retired_keyframes_;
+  std::sort(res_.keyframe_maps.begin(), res_.keyframe_maps.end(),
+            [](const auto& a, const auto& b) { return a.t < b.t; });
+  for (const RetiredKeyframe& k : res_.keyframe_maps) res_.keyframes.push_back({k.t, k.T_w_kf});
+  res_.pinhole = und_.pinhole();
+  res_.map = retired_points_;
+  res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, retired_keyframes_);
+  res_.events_refined = smoothPositions(
+      refinedTrajectory(res_.events, res_.event_anchors, retired_keyframes_), cfg_.event_smoothing_s);
+}
+
+void OdometryCore::pruneBuffered() {
+  const std::vector<BootstrapFrame>& bf = boot_->frames();
+  const TimeNs t0 = boot_->hasReference() && !bf.empty() ? bf.front().t : std::numeric_limits<TimeNs>::max();
+  std::erase_if(buffered_, [t0](const EventFrame& b) { return b.t < t0; });
+}
+
+// During the bootstrap the events track against its reference (its current inverse depths; 1 at
+// first): their pose at the next frame is the bootstrap's hint (frames far apart: a constant-velocity
+// guess is too far off). A new reference (a restart) is a new world: the tracking starts again.
+void OdometryCore::syncBootstrapEvents(TimeNs t) {
+  if (!cfg_.use_events || !boot_->hasReference()) return;
+  const Keyframe& ref = boot_->reference();
+  if (!boot_events_ || ref.t != boot_ref_t_ || boot_->restarts() != boot_restarts_) {
+    boot_events_.emplace(und_.pinhole(), cfg_.events);
+    boot_ref_t_ = ref.t, boot_restarts_ = boot_->restarts();
+    has_boot_event_ = false;
+  }
+  boot_events_->setReference(ref, SE3());
+  const BootstrapFrame& last = boot_->frames().back();
+  if (last.t == t) boot_events_->correct(t, last.T_ref_c);
+}
+
+void OdometryCore::syncReference() {
+  if (!cfg_.use_events || odo_->referenceId() == event_ref_id_ || odo_->reference().points.empty()) return;
+  events_->setReference(odo_->reference(), odo_->T_w_kf());
+  event_ref_id_ = odo_->referenceId();
+}
+
+// `bracket`: the frames before and after a buffered event frame (its start and motion prior).
+void OdometryCore::trackEvents(const EventFrame& ef, const SE3* prior,
+                               const std::function<bool(const SE3&)>& plausible,
+                               const std::pair<const StampedPose*, const StampedPose*>& bracket) {
+  const ScopedStage stage(&clock_, Stage::kEventTracking);
+  const auto t0 = Clock::now();
+  std::string why;
+  const std::optional<SE3> T = bracket.first
+                                   ? events_->trackBetween(ef, bracket.first->t, bracket.first->T_w_c,
+                                                           bracket.second->t, bracket.second->T_w_c, &why)
+                                   : events_->track(ef, prior, &why);
+  res_.event_track_ms.push_back(msSince(t0));
+  if (!T) {
+    res_.failures.push_back({ef.t, "event frame: " + why});
+    ++inputs_without_pose_;
+    return;
+  }
+  if (plausible && !plausible(*T)) {
+    res_.failures.push_back({ef.t, "event frame during the bootstrap: too far from the frames' poses"});
+    return;
+  }
+  ++res_.events_tracked;
+  last_good_t_ = ef.t;
+  inputs_without_pose_ = 0;
+  last_event_ = {ef.t, *T};
+  has_event_pose_ = true;
+  res_.events.push_back(last_event_);
+  res_.event_last_t.push_back(ef.t_last);
+  res_.event_anchors.push_back({events_->referenceId(), events_->T_w_kf().inverse() * *T});
+  if (events_->referenceId() != snapshot_ref_id_) snapshot(ef);
+}
+
+// Every stride-th keyframe's first event frame; at kMax, every other one goes and the stride doubles.
+void OdometryCore::snapshot(const EventFrame& ef) {
+  snapshot_ref_id_ = events_->referenceId();
+  if (snapshot_refs_++ % snapshot_stride_ != 0) return;
+  auto& shots = res_.event_snapshots;
+  shots.push_back(
+      {ef.t, snapshot_ref_id_, events_->lastCorrelation(), ef.delta.clone(), events_->lastPrediction()});
+  if (shots.size() < EventFrameSnapshot::kMax) return;
+  for (std::size_t i = 1; 2 * i < shots.size(); ++i) shots[i] = std::move(shots[2 * i]);
+  shots.resize((shots.size() + 1) / 2);
+  snapshot_stride_ *= 2;
+}
+
+}  // namespace eds

@@ -1,0 +1,89 @@
+#pragma once
+// The pipeline behind the stream merge: frames through the quality check, the bootstrap and the frame
+// front-end; event frames (when used) through the event front-end; each given in time order. It also
+// keeps the track alive: a lost track is relocalized, and when that keeps failing a new map segment
+// starts with a new bootstrap (its own world frame and scale).
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/undistorter.hpp"
+#include "frontend/frame_quality.hpp"
+#include "init/bootstrap.hpp"
+#include "system/event_frontend.hpp"
+#include "system/frame_frontend.hpp"
+#include "system/odometry.hpp"
+#include "system/stage_clock.hpp"
+
+namespace eds {
+
+class OdometryCore {
+ public:
+  OdometryCore(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res, StageClock& clock);
+
+  // A raw 8-bit frame.
+  void frame(TimeNs t, const cv::Mat& raw);
+  void eventFrame(const EventFrame& ef);
+  // After the last input: finishes the current segment's back-end and fills the result's keyframes,
+  // map, refined trajectories and back-end figures from every segment.
+  void finish();
+
+  TimeNs lastTime() const { return last_t_; }
+  // The current segment's frame front-end.
+  FrameFrontend& frontend() { return *odo_; }
+  const Undistorter& undistorter() const { return und_; }
+
+ private:
+  void bootstrapFrame(TimeNs t, const cv::Mat& img);
+  void trackFrame(TimeNs t, const cv::Mat& img);
+  void initialize(TimeNs t, const cv::Mat& img);
+  void trackBufferedEvents(const Trajectory& boot_traj);
+  bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found);
+  void loseTrack(TimeNs t_last_pose, const std::string& cause);
+  void startSegment(TimeNs t);
+  void retireSegment();
+  void pruneBuffered();
+  void syncBootstrapEvents(TimeNs t);
+  void syncReference();
+  void trackEvents(const EventFrame& ef, const SE3* prior,
+                   const std::function<bool(const SE3&)>& plausible = nullptr,
+                   const std::pair<const StampedPose*, const StampedPose*>& bracket = {});
+  void snapshot(const EventFrame& ef);
+
+  const OdometryConfig& cfg_;
+  OdometryResult& res_;
+  StageClock& clock_;
+  Undistorter und_;
+  FrameQualityGate quality_;
+  // The current map segment: its back-end, bootstrap and trackers start anew with each segment.
+  std::unique_ptr<FrameFrontend> odo_;
+  std::unique_ptr<Bootstrap> boot_;
+  std::unique_ptr<EventFrontend> events_;
+  bool initialized_ = false;  // the current segment's map exists
+  int event_ref_id_ = -1;
+  std::vector<EventFrame> buffered_;
+  std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
+  TimeNs boot_ref_t_ = -1;
+  int boot_restarts_ = -1;
+  StampedPose boot_event_;
+  bool has_boot_event_ = false;
+  StampedPose last_event_;
+  bool has_event_pose_ = false;
+  TimeNs last_t_ = 0;
+  TimeNs last_good_t_ = 0;  // of the last pose from a frame or event frame
+  bool lost_ = false;
+  int failed_in_row_ = 0;        // frame alignments
+  int inputs_without_pose_ = 0;  // frames and event frames since the last pose
+  int snapshot_ref_id_ = -1;
+  std::size_t snapshot_refs_ = 0, snapshot_stride_ = 1;
+  // What the back-ends of the segments before the current one left.
+  std::vector<RetiredKeyframe> retired_keyframes_;
+  std::vector<MapPoint> retired_points_;
+  BackendTimings retired_timings_;
+  StageSeconds retired_backend_stages_{};
+};
+
+}  // namespace eds
