@@ -207,11 +207,16 @@ std::string singleReport(const ReportInputs& in) {
     page += accuracyTables(rows);
     paths.push_back({"ground truth", kGtColour, clipTo(*in.gt, primary(run)), true});
   }
+  // Each trajectory through its own evaluation's alignment (one per map segment), when it has one.
+  const auto aligned = [&](const Trajectory& traj, const std::string& label) {
+    for (const TrajectoryEval& e : evals)
+      if (e.label == label) return eval::alignedEstimate(traj, e.ate);
+    return eval::applySim3(traj, align);
+  };
   if (!run.events.empty())
-    paths.push_back({"event-rate poses", kEventsColour, eval::applySim3(run.events, align)});
-  if (!run.frames.empty())
-    paths.push_back(
-        {run.is_run ? "frame poses" : "poses", kFramesColour, eval::applySim3(run.frames, align)});
+    paths.push_back({"event-rate poses", kEventsColour, aligned(run.events, "event-rate poses")});
+  const std::string frames_label = run.is_run ? "frame poses" : "poses";
+  if (!run.frames.empty()) paths.push_back({frames_label, kFramesColour, aligned(run.frames, frames_label)});
   TimeNs t0 = primary(run).empty() ? 0 : primary(run).front().t;
   if (!run.frames.empty()) t0 = std::min(t0, run.frames.front().t);
   page += "<h2>Trajectory</h2><div class='row'>" + trajectoryPlots(paths) + "</div>";

@@ -22,6 +22,8 @@ struct RunData {
   bool is_run = false;        // an `eds run` folder (else a bare trajectory)
   nlohmann::json summary, timings;
   Trajectory events, frames, keyframes;  // final poses; `frames` holds a bare trajectory
+  // Where new map segments begin in `events` and `frames` (their "# segment" lines; none: one map).
+  std::vector<std::size_t> event_segments, frame_segments;
   PointCloud map;
   std::vector<EventFrameSnapshot> snapshots;
 };
