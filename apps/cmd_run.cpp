@@ -89,6 +89,18 @@ void runRun(RunArgs& a) {
         "initialized at %.2f s after %d frames; %zu poses, %zu keyframes, %zu map points, %zu failures\n",
         toSeconds(r.init_t - r.first_t), r.init_frames, r.frames.size(), r.keyframes.size(), r.map.size(),
         r.failures.size());
+  for (const TrackLoss& l : r.losses) {
+    std::printf("track lost at %.2f s (%s): ", toSeconds(l.t_lost - r.first_t), l.cause.c_str());
+    if (l.t_recovered >= 0)
+      std::printf("recovered at %.2f s, %s\n", toSeconds(l.t_recovered - r.first_t), l.recovery.c_str());
+    else
+      std::printf("not recovered\n");
+  }
+  if (r.segments.size() > 1)
+    std::printf(
+        "%zu map segments, each with its own world frame and scale ('# segment' lines in the "
+        "trajectory files)\n",
+        r.segments.size());
   if (r.interrupted)
     std::printf("interrupted at %.2f s of the sequence: the outputs hold what was computed until then\n",
                 toSeconds(r.interrupted_t - r.first_t));
