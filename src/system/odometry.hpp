@@ -116,6 +116,10 @@ struct OdometryConfig {
   // The refined event-rate positions (trajectory_events.txt): a local quadratic fit over ±this many
   // seconds (system/trajectory_smoothing.hpp; 0: as composed). The live poses are never smoothed.
   double event_smoothing_s = 0.06;
+  // The refined event-rate poses are then anchored to the successfully aligned frames' refined poses
+  // (anchorToFrames) when the median interval between those frames is at most max_interval (at lower
+  // frame rates the frame poses are no better than the events'), between frames at most max_gap apart.
+  double event_anchor_max_interval_s = 0.5, event_anchor_max_gap_s = 2.0;
   RecoveryConfig recovery;
   double frame_rate = 0;  // > 0: keep the frames nearest this rate
   double start_s = 0;     // skip this much from the first frame
@@ -125,7 +129,8 @@ struct OdometryConfig {
 EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, mapping, backend, policy, threaded_backend, wait_for_keyframe, use_events,
            flicker_filter, event_frame, events, buffered_gate_translation, buffered_gate_rotation_deg,
-           event_smoothing_s, recovery, frame_rate, start_s, duration_s)
+           event_smoothing_s, event_anchor_max_interval_s, event_anchor_max_gap_s, recovery, frame_rate,
+           start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;

@@ -13,6 +13,8 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
   if (!(cfg.stream.max_frame_wait_s >= 0) || cfg.stream.max_pending_frames < 0)
     throw std::invalid_argument(
         "Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
+  if (!(cfg.event_anchor_max_gap_s >= 0) || !(cfg.event_anchor_max_interval_s >= 0))
+    throw std::invalid_argument("Odometry: event_anchor_max_interval_s and max_gap_s must not be negative");
   const RecoveryConfig& r = cfg.recovery;
   const RelocalizerConfig& rl = r.relocalizer;
   if (!(r.gap_s > 0) || r.failed_frames < 1 || !(r.max_refinement > 0) || r.new_map_after_frames < 1 ||

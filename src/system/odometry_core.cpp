@@ -93,6 +93,7 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
   const SE3 T_w_f = odo_->track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
   res_.frames.push_back({t, T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * T_w_f});
+  frame_ok_.push_back(odo_->lastTrackOk());
   if (odo_->lastTrackOk()) {
     events_->correct(t, T_w_f);
     last_good_t_ = t;
@@ -157,6 +158,7 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   for (std::size_t k = 0; k + 1 < boot_traj.size(); ++k) {
     res_.frames.push_back(boot_traj[k]);
     res_.frame_anchors.push_back({ref_id, boot_traj[k].T_w_c});
+    frame_ok_.push_back(1);
   }
   odo_->setLast(boot_traj[boot_traj.size() - 2].T_w_c);
   odo_->setLastBrightness(last.a, last.b);
@@ -164,6 +166,7 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   odo_->setLast(T_w_f);
   res_.frames.push_back({t, T_w_f});
   res_.frame_anchors.push_back({ref_id, T_w_f});
+  frame_ok_.push_back(1);
   res_.tracked += boot_traj.size();
   if (!cfg_.use_events) return;
   events_->setReference(ref, SE3());
@@ -290,8 +293,20 @@ void OdometryCore::finish() {
   res_.pinhole = und_.pinhole();
   res_.map = retired_points_;
   res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, retired_keyframes_);
+  Trajectory aligned_frames;
+  for (std::size_t i = 0; i < res_.frames_refined.size() && i < frame_ok_.size(); ++i)
+    if (frame_ok_[i]) aligned_frames.push_back(res_.frames_refined[i]);
   res_.events_refined = smoothPositions(
       refinedTrajectory(res_.events, res_.event_anchors, retired_keyframes_), cfg_.event_smoothing_s);
+  std::vector<TimeNs> intervals;
+  for (std::size_t i = 1; i < aligned_frames.size(); ++i)
+    intervals.push_back(aligned_frames[i].t - aligned_frames[i - 1].t);
+  if (!intervals.empty()) {
+    std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+    if (intervals[intervals.size() / 2] <= fromSeconds(cfg_.event_anchor_max_interval_s))
+      res_.events_refined = anchorToFrames(res_.events_refined, aligned_frames,
+                                           fromSeconds(cfg_.event_anchor_max_gap_s), segmentStartTimes(res_));
+  }
 }
 
 void OdometryCore::pruneBuffered() {

@@ -79,6 +79,7 @@ class OdometryCore {
   int inputs_without_pose_ = 0;  // frames and event frames since the last pose
   int snapshot_ref_id_ = -1;
   std::size_t snapshot_refs_ = 0, snapshot_stride_ = 1;
+  std::vector<char> frame_ok_;  // parallel to the result's frames: the alignment succeeded
   // What the back-ends of the segments before the current one left.
   std::vector<RetiredKeyframe> retired_keyframes_;
   std::vector<MapPoint> retired_points_;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "system/run_stats.hpp"
+
 namespace eds {
 
 Trajectory smoothPositions(const Trajectory& traj, double half_window_s) {
@@ -31,6 +33,43 @@ Trajectory smoothPositions(const Trajectory& traj, double half_window_s) {
     if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-9)) continue;  // all poses at one time
     const Eigen::Matrix3d coef = ldlt.solve(B);
     out[i].T_w_c = SE3(traj[i].T_w_c.so3(), coef.row(0).transpose());
+  }
+  return out;
+}
+
+namespace {
+
+struct Offset {
+  Vec3 dp;
+  Quat dq;  // R_frame R_event^-1
+};
+
+Offset offsetAt(const Trajectory& events, const StampedPose& frame) {
+  const SE3 T_e = poseAt(events, frame.t);
+  return {frame.T_w_c.translation() - T_e.translation(),
+          frame.T_w_c.quaternion() * T_e.quaternion().conjugate()};
+}
+
+}  // namespace
+
+Trajectory anchorToFrames(const Trajectory& events, const Trajectory& frames, TimeNs max_gap,
+                          const std::vector<TimeNs>& breaks) {
+  Trajectory out = events;
+  if (events.size() < 2) return out;
+  std::size_t k = 0;  // frames[k] is the first frame at or after the pose
+  for (StampedPose& p : out) {
+    while (k < frames.size() && frames[k].t < p.t) ++k;
+    if (k == frames.size()) continue;
+    // A pose at a frame's time takes that frame's offset alone.
+    const StampedPose& b = frames[k];
+    const StampedPose& a = b.t == p.t || k == 0 ? b : frames[k - 1];
+    if (a.t > p.t) continue;  // before the first frame
+    if (b.t - a.t > max_gap || a.t < events.front().t || b.t > events.back().t) continue;
+    if (std::any_of(breaks.begin(), breaks.end(), [&](TimeNs t) { return t > a.t && t <= b.t; })) continue;
+    const Offset oa = offsetAt(events, a), ob = offsetAt(events, b);
+    const double w = b.t > a.t ? static_cast<double>(p.t - a.t) / static_cast<double>(b.t - a.t) : 0.0;
+    const Quat dq = oa.dq.slerp(w, ob.dq);
+    p.T_w_c = SE3(dq * p.T_w_c.quaternion(), p.T_w_c.translation() + (1 - w) * oa.dp + w * ob.dp);
   }
   return out;
 }

@@ -137,7 +137,7 @@ TEST(DistortedLens, EventsAndFramesMatchThePinholeCase) {
   EDS_REQUIRE_SHARED(poster, "trajectories/ecd_poster_6dof_groundtruth.txt");
   EDS_REQUIRE_SHARED(calib, "ecd_slider_depth/calib.txt");
   const Pair& p = deskPair();
-  expectClose("desk 8 s, eds run", odometry(p.pinhole), odometry(p.radtan), {0.142, 0.149}, {0.201, 0.211});
+  expectClose("desk 8 s, eds run", odometry(p.pinhole), odometry(p.radtan), {0.081, 0.087}, {0.101, 0.106});
 }
 
 }  // namespace

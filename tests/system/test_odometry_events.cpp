@@ -71,15 +71,18 @@ OdometryResult runAndCheck(double frame_rate, test::Measured live, test::Measure
   return r;
 }
 
-TEST(EventsAndFrames, RoomFullFrameRate) { runAndCheck(0.0, {0.226, 0.978}, {0.157, 0.632}); }
+// The refined rotation RMSE here (after the sim3 alignment of a jittery 14 cm path) is mostly the
+// alignment's: with the best rotation alignment alone the event poses are at 0.08 deg, the frame poses at
+// 0.03 deg (docs/experiments.md, anchoring to the frames).
+TEST(EventsAndFrames, RoomFullFrameRate) { runAndCheck(0.0, {0.226, 0.978}, {0.140, 1.049}); }
 
 // The back-end in its own thread. By default the frame after a keyframe waits for it (about once per
 // keyframe); with wait_for_keyframe off, the keyframe policy measures the motion from the keyframe
 // being mapped, and tracking goes on against the previous one: it waited after every keyframe when
 // the policy still measured from the previous reference.
 TEST(EventsAndFrames, RoomThreadedBackend) {
-  const OdometryResult waits = runAndCheck(0.0, {}, {0.157, 0.632}, true, true);
-  const OdometryResult live = runAndCheck(0.0, {}, {0.157, 0.632}, true, false);
+  const OdometryResult waits = runAndCheck(0.0, {}, {0.140, 1.049}, true, true);
+  const OdometryResult live = runAndCheck(0.0, {}, {0.140, 1.049}, true, false);
   std::printf("[ threaded ] %zu keyframes, %zu waits; without waiting: %zu keyframes, %zu waits\n",
               waits.keyframes.size(), waits.backend_waits, live.keyframes.size(), live.backend_waits);
   EXPECT_LE(live.backend_waits, live.keyframes.size() / 3);
@@ -87,7 +90,7 @@ TEST(EventsAndFrames, RoomThreadedBackend) {
 // The bootstrap on this jittery motion takes 1.6-1.8 s; the event frames buffered meanwhile are tracked
 // with the frames' interpolation as their motion prior (it was 1.06 cm with the interpolation as their
 // start only).
-TEST(EventsAndFrames, RoomFramesAt5Hz) { runAndCheck(5.0, {0.768, 1.067}, {0.374, 0.933}); }
+TEST(EventsAndFrames, RoomFramesAt5Hz) { runAndCheck(5.0, {0.768, 1.067}, {0.353, 0.613}); }
 
 // Frames far apart: the bootstrap's second
 // frame comes 0.4 or 1 s after the first, and only the events' pose brings it into the alignment's
@@ -112,7 +115,7 @@ void runEsimAt(double frame_rate, test::Measured refined) {
   test::expectAccuracy("ESIM, frames at " + test::hz(frame_rate) + ", refined", ar, refined);
 }
 
-TEST(EventsAndFrames, EsimFramesAt2p5Hz) { runEsimAt(2.5, {0.271, 0.355}); }
+TEST(EventsAndFrames, EsimFramesAt2p5Hz) { runEsimAt(2.5, {0.217, 0.189}); }
 TEST(EventsAndFrames, EsimFramesAt1Hz) { runEsimAt(1.0, {0.831, 0.362}); }
 
 // The whole ESIM sequence at its 25 Hz frames: the event-rate poses as tracked (what a live user had)
@@ -130,7 +133,7 @@ TEST(EventsAndFrames, EsimFullFrameRate) {
   const eval::AteResult refined = eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{});
   const eval::AteResult frames = eval::evaluateAte(r.frames_refined, gt, eval::EvalConfig{});
   test::expectAccuracy("ESIM, events, as tracked", live, {0.127, 0.192});
-  test::expectAccuracy("ESIM, events, refined", refined, {0.096, 0.125});
+  test::expectAccuracy("ESIM, events, refined", refined, {0.093, 0.119});
   test::expectAccuracy("ESIM, frame poses of the events run, refined", frames, {0.089, 0.111});
   EXPECT_GE(refined.coverage, 0.95);
 }

@@ -51,11 +51,11 @@ void runScene(const std::string& preset, Mode mode, double frame_rate, test::Mea
   EXPECT_GE(a.coverage, 0.9);
 }
 
-TEST(SimScenes, RoomEventsAndFrames) { runScene("room", Mode::kEvents, 0, {0.193, 0.120}); }
+TEST(SimScenes, RoomEventsAndFrames) { runScene("room", Mode::kEvents, 0, {0.133, 0.070}); }
 TEST(SimScenes, RoomFramesOnly) { runScene("room", Mode::kFrames, 0, {0.155, 0.062}); }
-TEST(SimScenes, DeskEventsAndFrames) { runScene("desk", Mode::kEvents, 0, {0.106, 0.115}); }
+TEST(SimScenes, DeskEventsAndFrames) { runScene("desk", Mode::kEvents, 0, {0.074, 0.070}); }
 TEST(SimScenes, DeskFramesOnly) { runScene("desk", Mode::kFrames, 0, {0.061, 0.061}); }
-TEST(SimScenes, DeskEventsAndFramesAt5Hz) { runScene("desk", Mode::kEvents, 5, {0.111, 0.116}); }
+TEST(SimScenes, DeskEventsAndFramesAt5Hz) { runScene("desk", Mode::kEvents, 5, {0.092, 0.086}); }
 
 }  // namespace
 }  // namespace eds

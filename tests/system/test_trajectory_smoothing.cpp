@@ -71,5 +71,41 @@ TEST(TrajectorySmoothing, LinesStayExactAndGapsAreNotBridged) {
   EXPECT_THROW(smoothPositions(gap, 0.05), std::invalid_argument);
 }
 
+// Event poses off the truth by a slowly varying offset (position and rotation), frames exact every
+// 50 ms: anchored, the offset is gone but for what its curvature leaves between two frames; a new map
+// segment between two frames, or frames too far apart, leave the poses as they were.
+TEST(AnchorToFrames, RemovesASlowOffsetBetweenExactFrames) {
+  Trajectory truth, events, frames;
+  for (TimeNs t = 0; t <= fromSeconds(2.0); t += 4'000'000) {
+    const double s = toSeconds(t);
+    const SE3 T(SO3::exp(Vec3(0.2 * s, 0.1, 0)), Vec3(0.3 * s, 0.02, 1.0));
+    truth.push_back({t, T});
+    const SE3 drift(SO3::exp(Vec3(0, 0.004 * std::sin(3 * s), 0)), Vec3(0.003 * std::sin(2 * s), 0.002, 0));
+    events.push_back({t, SE3(drift.so3() * T.so3(), T.translation() + drift.translation())});
+    if (t % 50'000'000 == 0) frames.push_back({t, T});
+  }
+  const Trajectory anchored = anchorToFrames(events, frames, fromSeconds(0.5));
+  EXPECT_GT(rms(events, truth), 0.002);
+  EXPECT_LT(rms(anchored, truth), 1e-5);
+  double worst_deg = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    worst_deg = std::max(
+        worst_deg, (truth[i].T_w_c.so3().inverse() * anchored[i].T_w_c.so3()).log().norm() * 180 / M_PI);
+  EXPECT_LT(worst_deg, 0.01);
+  // A break at 1.01 s: the poses between the frames at 1.0 and 1.05 s keep their offset.
+  const Trajectory broken = anchorToFrames(events, frames, fromSeconds(0.5), {fromSeconds(1.01)});
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const bool inside = events[i].t > fromSeconds(1.0) && events[i].t < fromSeconds(1.05);
+    const double d = (broken[i].T_w_c.translation() - events[i].T_w_c.translation()).norm();
+    if (inside) EXPECT_EQ(d, 0.0) << i;
+  }
+  EXPECT_GT(rms(broken, truth), 1e-5);
+  // Frames farther apart than the limit are no anchors for the poses between them.
+  const Trajectory apart = anchorToFrames(events, frames, fromSeconds(0.04));
+  for (std::size_t i = 0; i < events.size(); ++i)
+    if (events[i].t % 50'000'000 != 0)
+      EXPECT_EQ((apart[i].T_w_c.translation() - events[i].T_w_c.translation()).norm(), 0.0) << i;
+}
+
 }  // namespace
 }  // namespace eds
