@@ -282,6 +282,7 @@ void OdometryCore::retireSegment() {
 
 void OdometryCore::finish() {
   retireSegment();
+  const ScopedStage stage(&clock_, Stage::kResults);
   res_.mapping_ms = retired_timings_.mapping_ms;
   res_.ba_ms = retired_timings_.ba_ms;
   res_.window_points = retired_timings_.window_points;
