@@ -224,7 +224,8 @@ class Odometry::Impl {
     const ScopedStage stage(&clock_, Stage::kResults);
     if (res_.initialized && !told_init_) listener_->onInitialized(res_.init_t), told_init_ = true;
     FrameFrontend& odo = core_.frontend();
-    if (res_.initialized && odo.referenceId() != told_kf_) {
+    // A new map segment has no reference until its bootstrap ends (id -1): nothing to tell then.
+    if (res_.initialized && odo.referenceId() >= 0 && odo.referenceId() != told_kf_) {
       told_kf_ = odo.referenceId();
       listener_->onKeyframe({told_kf_, odo.reference().t, odo.T_w_kf(), odo.reference().points.size()});
     }
