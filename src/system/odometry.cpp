@@ -235,6 +235,9 @@ class Odometry::Impl {
       listener_->onEventPose(res_.events[told_events_], res_.event_anchors[told_events_].kf_id);
     for (; told_failures_ < res_.failures.size(); ++told_failures_)
       listener_->onFailure(res_.failures[told_failures_]);
+    for (told_segments_ = std::max<std::size_t>(told_segments_, 1); told_segments_ < res_.segments.size();
+         ++told_segments_)
+      listener_->onNewMapSegment(res_.segments[told_segments_]);
   }
 
   Clock::time_point wall0_;
@@ -262,7 +265,7 @@ class Odometry::Impl {
   TimeNs last_frame_in_ = 0, last_frame_done_ = std::numeric_limits<TimeNs>::min();
   bool told_init_ = false;
   int told_kf_ = -1;
-  std::size_t told_frames_ = 0, told_events_ = 0, told_failures_ = 0;
+  std::size_t told_frames_ = 0, told_events_ = 0, told_failures_ = 0, told_segments_ = 0;
 };
 
 Odometry::Odometry(const CameraModel& camera, const OdometryConfig& cfg, OdometryListener* listener)

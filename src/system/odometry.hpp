@@ -243,6 +243,9 @@ class OdometryListener {
   // A new tracking reference (keyframe) taken up by the trackers.
   virtual void onKeyframe(const KeyframeUpdate& /*kf*/) {}
   virtual void onFailure(const OdometryFailure& /*f*/) {}
+  // The track was lost for good and a new map starts (its bootstrap from the segment's t_start on):
+  // poses from here on are in the new segment's world frame and scale.
+  virtual void onNewMapSegment(const MapSegment& /*segment*/) {}
 };
 
 // The odometry as a push API: events and frames go in as they arrive, poses come out as they are

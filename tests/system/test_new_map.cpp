@@ -33,7 +33,7 @@ Trajectory turnedAt(const Trajectory& traj, double t_turn_s, double deg) {
   return out;
 }
 
-std::filesystem::path coveredTurningRoom(const std::filesystem::path& traj_file) {
+std::filesystem::path makeCoveredTurningRoom(const std::filesystem::path& traj_file) {
   const auto dir = test::tempDir("covered_turning_room");
   const Trajectory raw = sim::cutTrajectory(readTum(traj_file), 0.0, 8.0, traj_file.string());
   const sim::Motion motion{sim::smoothTrajectory(turnedAt(raw, 3.5, 60.0), 0.04)};
@@ -45,6 +45,11 @@ std::filesystem::path coveredTurningRoom(const std::filesystem::path& traj_file)
   sim::EventFaults faults;
   faults.gaps = {{at(3.0), at(4.0), 0.0}};
   test::writeSimSequence(dir, scene, motion, sc, {{at(3.0), at(4.0), 0.0}}, faults);
+  return dir;
+}
+
+const std::filesystem::path& coveredTurningRoom(const std::filesystem::path& traj_file) {
+  static const std::filesystem::path dir = makeCoveredTurningRoom(traj_file);
   return dir;
 }
 
@@ -89,6 +94,44 @@ TEST(Recovery, ANewMapStartsWhenTheCameraIsUncoveredElsewhere) {
   // One alignment over both segments (different world frames and scales) is far worse.
   const eval::AteResult one = eval::evaluateAte(r.events_refined, seq.groundTruth(), {});
   EXPECT_GT(one.trans.rmse, 3 * all.trans.rmse);
+}
+
+// What a live user hears through the push API (frames only): the new map is announced before any of
+// its poses, and every keyframe announced is a real one, in order.
+struct SegmentListener : OdometryListener {
+  std::vector<MapSegment> segments;
+  std::vector<int> keyframes;
+  Trajectory frames;
+  std::size_t frames_before_new_map = 0;
+  void onNewMapSegment(const MapSegment& s) override {
+    segments.push_back(s), frames_before_new_map = frames.size();
+  }
+  void onKeyframe(const KeyframeUpdate& k) override { keyframes.push_back(k.id); }
+  void onFramePose(const StampedPose& p, int) override { frames.push_back(p); }
+};
+
+TEST(Recovery, TheListenerHearsOfTheNewMapBeforeItsPoses) {
+  EDS_REQUIRE_SHARED(traj, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const Sequence seq(coveredTurningRoom(traj));
+  OdometryConfig cfg;
+  cfg.threaded_backend = false;
+  cfg.use_events = false;
+  SegmentListener listener;
+  Odometry odo(seq.camera(), cfg, &listener);
+  for (std::size_t f = 0; f < seq.frames().size(); ++f) odo.addFrame(seq.frames()[f].t, seq.loadFrame(f));
+  const OdometryResult& r = odo.finish();
+  ASSERT_EQ(r.segments.size(), 2u);
+  ASSERT_EQ(listener.segments.size(), 1u);
+  EXPECT_EQ(listener.segments[0].id, 1);
+  EXPECT_EQ(listener.segments[0].t_start, r.segments[1].t_start);
+  ASSERT_GT(listener.frames_before_new_map, 0u);
+  ASSERT_LT(listener.frames_before_new_map, listener.frames.size());
+  EXPECT_LT(listener.frames[listener.frames_before_new_map - 1].t, r.segments[1].t_start);
+  EXPECT_GE(listener.frames[listener.frames_before_new_map].t, r.segments[1].t_start);
+  ASSERT_GE(listener.keyframes.size(), 4u);
+  EXPECT_GE(listener.keyframes.front(), 0);
+  for (std::size_t k = 1; k < listener.keyframes.size(); ++k)
+    EXPECT_GT(listener.keyframes[k], listener.keyframes[k - 1]);
 }
 
 // The segment marks survive the trajectory file, and `eds eval` aligns each segment on its own.
