@@ -12,8 +12,9 @@ namespace eds {
 
 void BootstrapConfig::validate() const {
   points.validate();
-  if (!(min_parallax_px > 0) || min_points < 1 || min_frames < 1 || max_frames <= min_frames ||
-      !(max_rmse > 0) || depth_prior_weight < 0)
+  if (!(min_parallax_px > 0) || !(min_parallax_px_sparse > 0) || !(sparse_frame_interval_s > 0) ||
+      min_points < 1 || min_frames < 1 || max_frames <= min_frames || !(max_rmse > 0) ||
+      depth_prior_weight < 0)
     throw std::invalid_argument("bootstrap: bad configuration");
 }
 
@@ -207,8 +208,9 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     photometric_failed_ = true;
     return keepForGeometry(t, image);
   }
-  if (n_after < cfg_.min_frames || parallax_ < cfg_.min_parallax_px || geo_state_ == GeoState::kPending)
-    return false;
+  const bool sparse = t - frames_[frames_.size() - 2].t >= fromSeconds(cfg_.sparse_frame_interval_s);
+  const double min_parallax = sparse ? cfg_.min_parallax_px_sparse : cfg_.min_parallax_px;
+  if (n_after < cfg_.min_frames || parallax_ < min_parallax || geo_state_ == GeoState::kPending) return false;
   normalizeScale();
   done_ = true;
   return true;

@@ -36,6 +36,10 @@ struct BootstrapConfig {
   int ba_levels = 1;                 // pyramid levels of the two-frame BA (1: full resolution only)
   double depth_prior_weight = 0.02;  // ½ w (ρ − 1)² per point; intensity units² per (1/m)²
   double min_parallax_px = 8.0;      // RMS pixel flow of the translation alone, to declare success
+  // With frames this far apart (s) or more, this much parallax is enough: waiting for more costs a
+  // second a frame, and a camera that mostly turns takes the reference out of view before it comes.
+  double sparse_frame_interval_s = 0.4;
+  double min_parallax_px_sparse = 4.0;
   int min_points = 300;              // a reference needs this many selected points (texture)
   int min_frames = 2;                // frames after the reference before success can be declared
   int max_frames = 50;               // no success by then: the newest frame becomes the reference
@@ -52,9 +56,10 @@ struct BootstrapConfig {
   void validate() const;
 };
 
-EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, depth_prior_weight, min_parallax_px, min_points,
-           min_frames, max_frames, max_parallax_step_px, max_rmse, max_log_brightness, max_intensity,
-           min_intensity, geometric, geometric_init, fill)
+EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, depth_prior_weight, min_parallax_px,
+           sparse_frame_interval_s, min_parallax_px_sparse, min_points, min_frames, max_frames,
+           max_parallax_step_px, max_rmse, max_log_brightness, max_intensity, min_intensity, geometric,
+           geometric_init, fill)
 
 struct BootstrapFrame {
   TimeNs t = 0;

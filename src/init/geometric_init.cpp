@@ -6,6 +6,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "core/log.hpp"
+
 namespace eds {
 
 namespace {
@@ -35,6 +37,7 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   const cv::Size win(21, 21);
   cv::calcOpticalFlowPyrLK(prev_, gray, cur_, next, st, err, win, 3);
   cv::calcOpticalFlowPyrLK(gray, prev_, next, back, st_back, err, win, 3);
+  const std::size_t n_before = cur_.size();
   std::size_t k = 0;
   for (std::size_t i = 0; i < cur_.size(); ++i) {
     const bool inside =
@@ -51,6 +54,9 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   std::vector<double> flow(k);
   for (std::size_t i = 0; i < k; ++i) flow[i] = cv::norm(cur_[i] - ref_[i]);
   std::nth_element(flow.begin(), flow.begin() + k / 2, flow.end());
+  if (logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug, "bootstrap: %zu of %zu corners tracked, median flow %.1f px", k, n_before,
+         flow[k / 2]);
   if (flow[k / 2] < cfg_.min_flow_px) return std::nullopt;
 
   const cv::Matx33d K(cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1);
@@ -58,13 +64,20 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   const cv::Mat E = cv::findEssentialMat(ref_, cur_, K, cv::RANSAC, 0.999, cfg_.ransac_px, mask_e);
   const cv::Mat Hm = cv::findHomography(ref_, cur_, cv::RANSAC, cfg_.ransac_px, mask_h);
   GeometricInitResult res;
-  if (E.rows != 3 || E.cols != 3) return std::nullopt;  // several solutions or none: not this frame
+  if (E.rows != 3 || E.cols != 3) {  // several solutions or none: not this frame
+    logf(LogLevel::kDebug, "bootstrap: no single essential matrix");
+    return std::nullopt;
+  }
   const int n_e = cv::countNonZero(mask_e), n_h = Hm.empty() ? 0 : cv::countNonZero(mask_h);
   res.planar = n_h >= cfg_.planar_ratio * n_e;
   if (res.planar) return res;
   cv::Mat R, t;
   res.inliers = cv::recoverPose(E, ref_, cur_, K, R, t, mask_e);
-  if (res.inliers < cfg_.min_tracks) return std::nullopt;
+  if (res.inliers < cfg_.min_tracks) {
+    logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers (RANSAC %d, homography %d)", res.inliers,
+         n_e, n_h);
+    return std::nullopt;
+  }
   Mat3 Re;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) Re(r, c) = R.at<double>(r, c);
@@ -91,10 +104,15 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
     const Vec3 X0 = x0 * zs[0], c1 = -(Re.transpose() * te);
     angles.push_back(std::acos(std::clamp(X0.normalized().dot((X0 - c1).normalized()), -1.0, 1.0)));
   }
+  logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers (homography %d), %zu triangulated",
+       res.inliers, n_h, res.points.size());
   if (static_cast<int>(res.points.size()) < cfg_.min_tracks) return std::nullopt;
   std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
   res.parallax_deg = angles[angles.size() / 2] * 180.0 / M_PI;
-  if (res.parallax_deg < cfg_.min_parallax_deg) return std::nullopt;
+  if (res.parallax_deg < cfg_.min_parallax_deg) {
+    logf(LogLevel::kDebug, "bootstrap: median triangulation angle %.2f deg", res.parallax_deg);
+    return std::nullopt;
+  }
   return res;
 }
 

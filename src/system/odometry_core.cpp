@@ -182,7 +182,10 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
 
 // The event frames that arrived during the bootstrap, against its reference keyframe, each from the
 // bootstrap's pose at its time.
+constexpr double kMaxSpeedup = 4.0;
+
 void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
+  StampedPose last{boot_traj.front().t, boot_traj.front().T_w_c};  // the last accepted pose
   for (EventFrame& ef : buffered_) {
     if (ef.t < boot_traj.front().t) continue;
     const SE3 prior = poseAt(boot_traj, ef.t);
@@ -196,13 +199,23 @@ void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
     const double max_t = 0.5 * AB.translation().norm() + cfg_.buffered_gate_translation;
     const double max_r = 0.5 * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
     const bool between = it != boot_traj.begin() && it != boot_traj.end();
+    // Nor may it move from the last accepted pose faster than kMaxSpeedup times the frames' mean speed:
+    // frames a second apart leave the first gate wide, and a wrong minimum is a jump.
+    if (between && (it - 1)->t > last.t) last = *(it - 1);
+    const double span = between ? toSeconds(it->t - (it - 1)->t) : 0.0;
+    const double f = span > 0 ? kMaxSpeedup * toSeconds(ef.t - last.t) / span : 0.0;
+    const double step_t = f * AB.translation().norm() + cfg_.buffered_gate_translation;
+    const double step_r = f * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
+    const std::size_t n_before = res_.events.size();
     trackEvents(
         ef, &prior,
         [&](const SE3& T) {
-          const SE3 d = prior.inverse() * T;
-          return d.translation().norm() <= max_t && d.so3().angle() <= max_r;
+          const SE3 d = prior.inverse() * T, s = last.T_w_c.inverse() * T;
+          return d.translation().norm() <= max_t && d.so3().angle() <= max_r &&
+                 (!between || (s.translation().norm() <= step_t && s.so3().angle() <= step_r));
         },
         between ? std::make_pair(&*(it - 1), &*it) : std::pair<const StampedPose*, const StampedPose*>{});
+    if (res_.events.size() > n_before) last = res_.events.back();
   }
 }
 

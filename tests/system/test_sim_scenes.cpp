@@ -31,6 +31,23 @@ std::filesystem::path sceneSequence(const std::string& preset, const std::filesy
   return done[preset] = dir;
 }
 
+// The room along 3 s of the real shapes_rotation motion (from 4 s: turns at 20-50 deg/s, translation
+// 3-11 cm/s), smoothed as the low-frame-rate test set is (sigma = 40 ms, 10 ms exposure).
+std::filesystem::path turningRoomSequence(const std::filesystem::path& traj_file) {
+  static const std::filesystem::path dir = [&] {
+    const auto d = test::tempDir("scene_turning_room");
+    const sim::Motion motion{
+        sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.04), 4.0, 3.0, traj_file.string())};
+    sim::Scene scene = sim::makePreset("room", motion, 1);
+    scene.loadTextures();
+    sim::SimConfig sc = test::noisySimConfig(1);
+    sc.exposure_s = 0.01;
+    test::writeSimSequence(d, scene, motion, sc);
+    return d;
+  }();
+  return dir;
+}
+
 enum class Mode { kEvents, kFrames };
 
 void runScene(const std::string& preset, Mode mode, double frame_rate, test::Measured measured) {
@@ -56,6 +73,51 @@ TEST(SimScenes, RoomFramesOnly) { runScene("room", Mode::kFrames, 0, {0.155, 0.0
 TEST(SimScenes, DeskEventsAndFrames) { runScene("desk", Mode::kEvents, 0, {0.074, 0.070}); }
 TEST(SimScenes, DeskFramesOnly) { runScene("desk", Mode::kFrames, 0, {0.061, 0.061}); }
 TEST(SimScenes, DeskEventsAndFramesAt5Hz) { runScene("desk", Mode::kEvents, 5, {0.092, 0.086}); }
+
+// One frame a second over the first 4 s of the room: the bootstrap has frames 1 s apart and the events
+// carry the camera between them (the event frames since the first frame are tracked once the map
+// exists). Goal: ATE <= 2 cm, coverage of the 4 s >= 90 %. The rotation RMSE is the sim3 alignment's
+// on a short, slow start of the path (its mean equals its RMSE): not checked beyond the goal.
+TEST(SimScenes, RoomAtOneFramePerSecond) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const Sequence seq(sceneSequence("room", traj_file));
+  OdometryConfig cfg;
+  cfg.frame_rate = 1;
+  cfg.duration_s = 4;
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  EXPECT_LE(toSeconds(r.init_t - r.first_t), 2.0 + 1e-6);
+  Trajectory gt = seq.groundTruth();
+  std::erase_if(gt, [&](const StampedPose& p) { return p.t > r.first_t + fromSeconds(4.0); });
+  const eval::AteResult a = eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{});
+  std::printf(
+      "[ room, 4 s, 1 frame/s ] initialized after %.2f s; ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
+      toSeconds(r.init_t - r.first_t), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
+  EXPECT_LE(a.trans.rmse * 100, test::translationBoundCm(0.392));
+  EXPECT_LE(a.trans.rmse * 100, 2.0);
+  EXPECT_GE(a.coverage, 0.9);
+}
+
+// Two frames a second while the camera mostly turns: the translation gives 1-2.5 px of parallax per
+// frame and the turn takes the bootstrap's reference out of view within a second or two, so asking for
+// the 8 px of video rates it never initialized (over the whole 8 s of this motion). Goal: initialized
+// within 2 s of the first frame, ATE <= 1 cm, coverage >= 90 %.
+TEST(SimScenes, TurningRoomAtTwoFramesPerSecondInitializes) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_shapes_rotation_groundtruth.txt");
+  const Sequence seq(turningRoomSequence(traj_file));
+  OdometryConfig cfg;
+  cfg.frame_rate = 2;
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  const eval::AteResult a = eval::evaluateAte(r.events_refined, seq.groundTruth(), eval::EvalConfig{});
+  std::printf("[ turning room, 3 s, 2 frames/s ] initialized after %.2f s; ATE %.3f cm, coverage %.1f %%\n",
+              toSeconds(r.init_t - r.first_t), a.trans.rmse * 100, a.coverage * 100);
+  EXPECT_LE(toSeconds(r.init_t - r.first_t), 2.0 + 1e-6);
+  EXPECT_LE(a.trans.rmse * 100, 1.0);
+  EXPECT_GE(a.coverage, 0.9);
+}
 
 }  // namespace
 }  // namespace eds
