@@ -1,5 +1,7 @@
 // `eds eval`: absolute trajectory error and coverage of an estimate against ground truth, with the
 // conventions of rpg_trajectory_evaluation (DESIGN.md section 5).
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -29,7 +31,18 @@ void printStatsRow(const char* name, const eval::ErrorStats& s, double factor, c
               s.median * factor, s.max * factor, unit);
 }
 
-void printReport(const EvalOptions& o, const eval::AteResult& r) {
+// The median time between a pose and the ground-truth stamp it is paired with (no interpolation): an
+// error the estimate does not make, of about speed x this offset.
+double medianPairOffsetMs(const eval::EvalInputs& in, const eval::AteResult& r) {
+  std::vector<double> dt;
+  dt.reserve(r.pairs.size());
+  for (const eval::MatchedPair& p : r.pairs) dt.push_back(std::abs(toSeconds(in.est[p.est].t - in.gt[p.gt].t)));
+  if (dt.empty()) return 0;
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  return 1000 * dt[dt.size() / 2];
+}
+
+void printReport(const EvalOptions& o, const eval::AteResult& r, double median_offset_ms) {
   std::printf("ground truth : %s\n", o.gt.c_str());
   std::printf("estimate     : %s\n", o.est.c_str());
   std::printf("alignment    : %s over %s, scale %.6f\n", eval::toString(r.alignment).c_str(),
@@ -37,7 +50,8 @@ void printReport(const EvalOptions& o, const eval::AteResult& r) {
               r.transform.s);
   if (r.segment_transforms.size() > 1)
     std::printf("map segments : %zu, each aligned on its own\n", r.segment_transforms.size());
-  std::printf("matched pairs: %zu\n", r.pairs.size());
+  std::printf("matched pairs: %zu (median time to its ground-truth stamp %.2f ms)\n", r.pairs.size(),
+              median_offset_ms);
   std::printf("coverage     : %.1f %%\n", 100.0 * r.coverage);
   std::printf("  %-12s %10s %10s %10s %10s\n", "", "rmse", "mean", "median", "max");
   printStatsRow("translation", r.trans, 1.0, "m");
@@ -69,7 +83,7 @@ void runEval(EvalOptions o) {
 
   const eval::EvalInputs in = eval::readEvalInputs(o.gt, o.est);
   const eval::AteResult r = eval::evaluateAte(in, cfg);
-  printReport(o, r);
+  printReport(o, r, medianPairOffsetMs(in, r));
   nlohmann::json j = eval::toJson(r);
   if (o.rpe) {
     const std::vector<eval::RpeResult> rpe = eval::evaluateRpe(in.est, in.gt, r, cfg);

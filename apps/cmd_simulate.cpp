@@ -133,7 +133,7 @@ void runSimulate(const SimulateArgs& a) {
     sim::writeEcdCalib(out / "calib.txt", cam);
   sim::writeSceneYaml(out / "scene.yaml", scene);
   const TimeNs t0 = motion.start(), t1 = motion.end();
-  sim::writeGroundTruth(out / "groundtruth.txt", motion, t0, t1, 200.0);
+  sim::writeGroundTruth(out / "groundtruth.txt", motion, t0, t1, sim::kGroundTruthRateHz);
   sim::Simulator simulator(scene, cam, motion, cfg);
   const sim::SimStats st = faults.any() ? simulator.run(t0, t1, faulty) : simulator.run(t0, t1, writer);
   writer.finish();

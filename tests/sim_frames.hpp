@@ -44,7 +44,7 @@ inline sim::SimConfig noisySimConfig(std::uint64_t seed) {
 }
 
 // Writes a simulated sequence to `dir` in the ECD layout (plain-text events, no depth maps) with the
-// test camera and 200 Hz ground truth, as `eds simulate` does.
+// test camera and ground truth at sim::kGroundTruthRateHz, as `eds simulate` does.
 inline void writeSimSequence(const std::filesystem::path& dir, const sim::Scene& scene,
                              const sim::Motion& motion, const sim::SimConfig& sc,
                              std::vector<sim::FrameGain> frame_gains = {},
@@ -55,7 +55,7 @@ inline void writeSimSequence(const std::filesystem::path& dir, const sim::Scene&
   sim::EventFaultSink faulty(writer, event_faults, cam.width, cam.height);
   sim::SimSink& sink = event_faults.any() ? static_cast<sim::SimSink&>(faulty) : writer;
   sim::writeEcdCalib(dir / "calib.txt", cam);
-  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
+  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), sim::kGroundTruthRateHz);
   sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), sink);
   writer.finish();
 }

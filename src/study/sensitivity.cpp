@@ -34,7 +34,7 @@ void simulateBuilding(const std::filesystem::path& dir, std::uint64_t seed, doub
   cfg.fps = 20;
   sim::EcdWriter writer(dir, /*gzip=*/false, /*write_depth=*/true);
   sim::writeEcdCalib(dir / "calib.txt", cam);
-  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), 200.0);
+  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), sim::kGroundTruthRateHz);
   sim::Simulator(scene, cam, motion, cfg).run(motion.start(), motion.end(), writer);
   writer.finish();
 }

@@ -90,7 +90,7 @@ TEST(EventsAndFrames, RoomThreadedBackend) {
 // The bootstrap on this jittery motion takes 1.6-1.8 s; the event frames buffered meanwhile are tracked
 // with the frames' interpolation as their motion prior (it was 1.06 cm with the interpolation as their
 // start only).
-TEST(EventsAndFrames, RoomFramesAt5Hz) { runAndCheck(5.0, {0.768, 1.067}, {0.353, 0.613}); }
+TEST(EventsAndFrames, RoomFramesAt5Hz) { runAndCheck(5.0, {0.660, 0.923}, {0.364, 0.782}); }
 
 // Frames far apart: the bootstrap's second
 // frame comes 0.4 or 1 s after the first, and only the events' pose brings it into the alignment's
