@@ -24,7 +24,11 @@ struct EvalOptions {
   int align_frames = -1;
   bool align_frames_given = false;
   bool rpe = false;
+  bool interpolate_gt = false;
 };
+
+// Ground-truth samples further apart than this are not interpolated between.
+constexpr TimeNs kMaxInterpolationBracket = 50'000'000;
 
 void printStatsRow(const char* name, const eval::ErrorStats& s, double factor, const char* unit) {
   std::printf("  %-12s %10.4f %10.4f %10.4f %10.4f  %s\n", name, s.rmse * factor, s.mean * factor,
@@ -36,7 +40,8 @@ void printStatsRow(const char* name, const eval::ErrorStats& s, double factor, c
 double medianPairOffsetMs(const eval::EvalInputs& in, const eval::AteResult& r) {
   std::vector<double> dt;
   dt.reserve(r.pairs.size());
-  for (const eval::MatchedPair& p : r.pairs) dt.push_back(std::abs(toSeconds(in.est[p.est].t - in.gt[p.gt].t)));
+  for (const eval::MatchedPair& p : r.pairs)
+    dt.push_back(std::abs(toSeconds(in.est[p.est].t - in.gt[p.gt].t)));
   if (dt.empty()) return 0;
   std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
   return 1000 * dt[dt.size() / 2];
@@ -81,10 +86,12 @@ void runEval(EvalOptions o) {
   if (o.align_frames_given) cfg.align_frames = o.align_frames;
   if (!o.time_window.empty()) cfg.window = eval::readTimeWindowYaml(o.time_window);
 
-  const eval::EvalInputs in = eval::readEvalInputs(o.gt, o.est);
+  eval::EvalInputs in = eval::readEvalInputs(o.gt, o.est);
+  if (o.interpolate_gt) in.gt = eval::interpolatedAtStamps(in.gt, in.est, kMaxInterpolationBracket);
   const eval::AteResult r = eval::evaluateAte(in, cfg);
   printReport(o, r, medianPairOffsetMs(in, r));
   nlohmann::json j = eval::toJson(r);
+  j["ground_truth_interpolated"] = o.interpolate_gt;
   if (o.rpe) {
     const std::vector<eval::RpeResult> rpe = eval::evaluateRpe(in.est, in.gt, r, cfg);
     printRpe(rpe);
@@ -128,6 +135,9 @@ void addEvalCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--json", opts->json, "write the result as JSON");
   cmd->add_option("--aligned", opts->aligned, "write the estimate in the ground truth's frame (TUM)");
+  cmd->add_flag("--interpolate-gt", opts->interpolate_gt,
+                "pair each pose with the ground truth interpolated at its time (not the toolbox's nearest "
+                "stamp: fairer to poses at a higher rate than the ground truth)");
   cmd->add_flag("--rpe", opts->rpe,
                 "also compute relative errors over 10..50 % of the ground-truth path length");
   cmd->callback([opts, frames] {

@@ -5,6 +5,8 @@
 #include <numeric>
 #include <tuple>
 
+#include "core/se3.hpp"
+
 namespace eds::eval {
 namespace {
 
@@ -69,6 +71,26 @@ std::vector<MatchedPair> filterByGtWindow(const std::vector<MatchedPair>& pairs,
   for (const MatchedPair& p : pairs)
     if (window.contains(gt[p.gt].t)) kept.push_back(p);
   return kept;
+}
+
+Trajectory interpolatedAtStamps(const Trajectory& gt, const Trajectory& est, TimeNs max_bracket) {
+  const auto by_time = [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; };
+  Trajectory sorted = gt;
+  std::stable_sort(sorted.begin(), sorted.end(), by_time);
+  Trajectory out = sorted;
+  for (const StampedPose& e : est) {
+    const auto hi = std::lower_bound(sorted.begin(), sorted.end(), e, by_time);
+    if (hi == sorted.begin() || hi == sorted.end() || hi->t == e.t) continue;
+    const auto lo = hi - 1;
+    if (hi->t - lo->t > max_bracket) continue;
+    const double s = static_cast<double>(e.t - lo->t) / static_cast<double>(hi->t - lo->t);
+    out.push_back({e.t, interpolate(lo->T_w_c, hi->T_w_c, s)});
+  }
+  std::stable_sort(out.begin(), out.end(), by_time);
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const StampedPose& a, const StampedPose& b) { return a.t == b.t; }),
+            out.end());
+  return out;
 }
 
 }  // namespace eds::eval

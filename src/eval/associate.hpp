@@ -32,4 +32,11 @@ std::vector<MatchedPair> associate(const Trajectory& est, const Trajectory& gt, 
 std::vector<MatchedPair> filterByGtWindow(const std::vector<MatchedPair>& pairs, const Trajectory& gt,
                                           const TimeWindow& window);
 
+// The ground truth, time-sorted, with a pose interpolated (linear position, slerp rotation) at every
+// estimate stamp that two ground-truth samples at most max_bracket apart enclose, so that association
+// pairs such an estimate with the truth at its own time. Not the toolbox's convention (it pairs with
+// the nearest stamp): an estimate at a higher rate than the ground truth is otherwise charged with
+// speed x offset to the nearest stamp.
+Trajectory interpolatedAtStamps(const Trajectory& gt, const Trajectory& est, TimeNs max_bracket);
+
 }  // namespace eds::eval

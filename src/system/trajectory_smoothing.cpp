@@ -8,12 +8,12 @@
 
 namespace eds {
 
-Trajectory smoothPositions(const Trajectory& traj, double half_window_s) {
+Trajectory smoothPoses(const Trajectory& traj, double half_window_s) {
   Trajectory out = traj;
   if (!(half_window_s > 0)) return out;
   if (!std::is_sorted(traj.begin(), traj.end(),
                       [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; }))
-    throw std::invalid_argument("smoothPositions: poses out of time order");
+    throw std::invalid_argument("smoothPoses: poses out of time order");
   const TimeNs half = fromSeconds(half_window_s);
   std::size_t lo = 0, hi = 0;  // the window [lo, hi) of pose i
   for (std::size_t i = 0; i < traj.size(); ++i) {
@@ -21,18 +21,24 @@ Trajectory smoothPositions(const Trajectory& traj, double half_window_s) {
     while (hi < traj.size() && traj[hi].t <= traj[i].t + half) ++hi;
     if (hi - lo < 4) continue;  // a parabola through three points is no smoothing
     // p(s) = a + b s + c s^2 with s = dt / half_window (conditioning); the fit's value at s = 0 is a.
+    // Right-hand sides: x, y, z of the position, then the rotation vector from pose i's orientation
+    // (small within the window, so the fit in the tangent space at pose i is nearly a fit on SO(3)).
     Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    Eigen::Matrix3d B = Eigen::Matrix3d::Zero();  // columns: x, y, z right-hand sides
+    Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
+    const SO3 R_i_inv = traj[i].T_w_c.so3().inverse();
     for (std::size_t k = lo; k < hi; ++k) {
       const double s = toSeconds(traj[k].t - traj[i].t) / half_window_s;
       const Eigen::Vector3d basis(1, s, s * s);
+      Eigen::Matrix<double, 6, 1> rhs;
+      rhs << traj[k].T_w_c.translation(), (R_i_inv * traj[k].T_w_c.so3()).log();
       A.noalias() += basis * basis.transpose();
-      B.noalias() += basis * traj[k].T_w_c.translation().transpose();
+      B.noalias() += basis * rhs.transpose();
     }
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
     if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-9)) continue;  // all poses at one time
-    const Eigen::Matrix3d coef = ldlt.solve(B);
-    out[i].T_w_c = SE3(traj[i].T_w_c.so3(), coef.row(0).transpose());
+    const Eigen::Matrix<double, 3, 6> coef = ldlt.solve(B);
+    const Vec3 dw = coef.block<1, 3>(0, 3).transpose();
+    out[i].T_w_c = SE3(traj[i].T_w_c.so3() * SO3::exp(dw), coef.block<1, 3>(0, 0).transpose());
   }
   return out;
 }
