@@ -180,10 +180,13 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   if (n >= 1) events_->correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
 }
 
-// The event frames that arrived during the bootstrap, against its reference keyframe, each from the
-// bootstrap's pose at its time.
+// A buffered event pose may move from the last accepted one at most this many times faster than the
+// frames around it do on average (3 dropped good poses where the camera went back and forth within a
+// second; 6 let more wrong ones through).
 constexpr double kMaxSpeedup = 4.0;
 
+// The event frames that arrived during the bootstrap, against its reference keyframe, each from the
+// bootstrap's pose at its time.
 void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
   StampedPose last{boot_traj.front().t, boot_traj.front().T_w_c};  // the last accepted pose
   for (EventFrame& ef : buffered_) {
