@@ -1,6 +1,5 @@
 // `eds eval`: absolute trajectory error and coverage of an estimate against ground truth, with the
 // conventions of rpg_trajectory_evaluation (DESIGN.md section 5).
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -42,9 +41,7 @@ double medianPairOffsetMs(const eval::EvalInputs& in, const eval::AteResult& r) 
   dt.reserve(r.pairs.size());
   for (const eval::MatchedPair& p : r.pairs)
     dt.push_back(std::abs(toSeconds(in.est[p.est].t - in.gt[p.gt].t)));
-  if (dt.empty()) return 0;
-  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  return 1000 * dt[dt.size() / 2];
+  return 1000 * eval::computeStats(dt).median;
 }
 
 void printReport(const EvalOptions& o, const eval::AteResult& r, double median_offset_ms) {
