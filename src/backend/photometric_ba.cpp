@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -99,8 +100,8 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
       // linearization points; only the image gradient is taken at the current projection.
       const PairTransforms& G = lin ? *lin->pairs : pairs;
       const BaFrame& Hg = lin ? (*lin->frames)[host] : H;
-      const Vec3 X_g = G.R_t_h[pi] * X_h + G.T_t_h[pi].translation();
-      const double izg = X_g.z() > 1e-6 ? 1.0 / X_g.z() : iz;
+      const Vec3 X_g = lin ? Vec3(G.R_t_h[pi] * X_h + G.T_t_h[pi].translation()) : X_t;
+      const double izg = !lin ? iz : X_g.z() > 1e-6 ? 1.0 / X_g.z() : iz;
       const double eg = G.e[pi];
       const Eigen::RowVector3d dI_dX(dx * cam_.fx * izg, dy * cam_.fy * izg,
                                      -(dx * cam_.fx * X_g.x() + dy * cam_.fy * X_g.y()) * izg * izg);
@@ -129,6 +130,26 @@ bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& 
       target >= static_cast<int>(frames.size()))
     throw std::out_of_range("photometric BA: frame index out of range");
   return evaluateCore(frames, PairTransforms(frames), p.host, p.u, p.v, p.inv_depth, target, r, J);
+}
+
+std::vector<double> PhotometricBA::patternRms(const std::vector<BaFrame>& frames,
+                                              const std::vector<BaPoint>& points, int target) const {
+  if (target < 0 || target >= static_cast<int>(frames.size()))
+    throw std::out_of_range("photometric BA: frame index out of range");
+  for (const BaPoint& p : points)
+    if (p.host < 0 || p.host >= static_cast<int>(frames.size()))
+      throw std::out_of_range("photometric BA: point host out of range");
+  const PairTransforms pairs(frames);
+  std::vector<double> rms(points.size(), std::numeric_limits<double>::quiet_NaN());
+  forEachChunk(points.size(), [&](int, std::size_t begin, std::size_t end) {
+    Eigen::Matrix<double, 8, 1> r;
+    for (std::size_t i = begin; i < end; ++i) {
+      const BaPoint& p = points[i];
+      if (p.host != target && evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, target, r, nullptr))
+        rms[i] = std::sqrt(r.squaredNorm() / 8);
+    }
+  });
+  return rms;
 }
 
 // Normal equations of the photometric terms with the points kept apart (one inverse depth each), so

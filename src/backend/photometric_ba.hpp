@@ -106,6 +106,11 @@ class PhotometricBA {
   bool evaluate(const std::vector<BaFrame>& frames, const BaPoint& p, int target,
                 Eigen::Matrix<double, 8, 1>& r, Eigen::Matrix<double, 8, 17>* J) const;
 
+  // Each point's RMS pattern residual in frame `target` (√(|r|²/8) of evaluate()), NaN where the point
+  // is hosted there or its pattern leaves the image: the frames' pair transforms are built once.
+  std::vector<double> patternRms(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                                 int target) const;
+
  private:
   // The residuals of one point in one target at inverse depth rho (evaluate() without the point).
   // host_values: the 8 host intensities (HostPattern::I), or null to sample them.

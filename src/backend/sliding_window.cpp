@@ -65,11 +65,12 @@ int SlidingWindow::keyframeToRemove() const {
   // counts only inlier residuals; on the ECD slider that dropped keyframes sooner and measured worse:
   // rotation drift median over 5 start times 1.64 -> 1.42 deg with the image test.)
   std::vector<int> hosted(F, 0), visible(F, 0);
-  Eigen::Matrix<double, 8, 1> r;
-  for (const BaPoint& p : points_) {
+  const std::vector<double> rms = ba_.patternRms(frames_, points_, F - 1);
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    const BaPoint& p = points_[i];
     if (p.outlier || !(p.inv_depth > 0) || p.host >= F - 2) continue;
     ++hosted[p.host];
-    visible[p.host] += ba_.evaluate(frames_, p, F - 1, r, nullptr);
+    visible[p.host] += !std::isnan(rms[i]);
   }
   for (int i = 0; i + 2 < F; ++i)
     if (visible[i] < cfg_.min_visible * hosted[i]) return i;
@@ -141,8 +142,9 @@ std::vector<KeyframePoint> SlidingWindow::pointsIn(int f) const {
   std::vector<KeyframePoint> out;
   if (f < 0 || f >= size()) return out;
   const SE3 T_n_w = frames_[f].T_w_c.inverse();
-  Eigen::Matrix<double, 8, 1> r;
-  for (const BaPoint& p : points_) {
+  const std::vector<double> rms = ba_.patternRms(frames_, points_, f);
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    const BaPoint& p = points_[i];
     if (p.outlier || !(p.inv_depth > 0)) continue;
     const Vec3 x = cam_.pinholeRay(p.u, p.v);
     const Vec3 q = T_n_w * (frames_[p.host].T_w_c * (x / p.inv_depth));
@@ -153,9 +155,7 @@ std::vector<KeyframePoint> SlidingWindow::pointsIn(int f) const {
     // its tracking reference: a point hidden behind a nearer surface would give the trackers that
     // surface's texture at the hidden point's depth (with DSO's removal rule the window's older
     // keyframes see behind today's occluders).
-    if (p.host != f && !(ba_.evaluate(frames_, p, f, r, nullptr) &&
-                         std::sqrt(r.squaredNorm() / 8) <= cfg_.ba.outlier_energy))
-      continue;
+    if (p.host != f && !(rms[i] <= cfg_.ba.outlier_energy)) continue;
     KeyframePoint kp;
     kp.u = static_cast<float>(u), kp.v = static_cast<float>(v);
     kp.inv_depth = 1.0 / q.z();
