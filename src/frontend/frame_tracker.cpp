@@ -154,6 +154,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
           if (converged) it = cfg_.max_iterations;
         } else {
           lm.rejected();
+          if (delta.head<6>().norm() < cfg_.min_step) break;  // only more damping would follow
         }
       }
       if (!improved) break;

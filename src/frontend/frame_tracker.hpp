@@ -21,9 +21,14 @@ struct FrameTrackerConfig {
   double max_rmse = 0.08;    // above this at the finest level: reported as lost
   int min_residuals = 100;
   double convergence = 1e-8;  // a level ends when the cost falls by less than this fraction
+  // A level also ends when a rejected step was shorter than this (radians and map units; the map's
+  // median depth is ~1): at the minimum the steps are ~1e-6, and retrying them with more damping
+  // (up to 5 evaluations) changes nothing. 0: off.
+  double min_step = 0;
 };
 
-EDS_FIELDS(FrameTrackerConfig, levels, max_iterations, huber, affine, max_rmse, min_residuals, convergence)
+EDS_FIELDS(FrameTrackerConfig, levels, max_iterations, huber, affine, max_rmse, min_residuals, convergence,
+           min_step)
 
 struct FrameTrackResult {
   bool ok = false;
