@@ -81,13 +81,16 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
   const Mat3& R_t_h = pairs.R_t_h[pi];
   const double e = pairs.e[pi];
   const int W = H.image.cols, Hh = H.image.rows;
+  // A pattern pixel's ray is the centre's plus (δu/fx, δv/fy, 0), so its point in the target follows
+  // from the centre's through two columns of R_t_h: no division per pixel.
+  const double inv_rho = 1.0 / rho;
+  const Vec3 x_c = cam_.pinholeRay(u, v);
+  const Vec3 Rx_c = R_t_h * x_c, R_du = R_t_h.col(0) / cam_.fx, R_dv = R_t_h.col(1) / cam_.fy;
   for (int k = 0; k < 8; ++k) {
     const double uk = u + kPattern[k][0], vk = v + kPattern[k][1];
     if (uk < 0 || vk < 0 || uk >= W - 1 || vk >= Hh - 1) return false;
     const double I_h = host_values ? host_values[k] : static_cast<double>(sampleBilinear(H.image, uk, vk));
-    const Vec3 x_h = cam_.pinholeRay(uk, vk);
-    const Vec3 X_h = x_h / rho;
-    const Vec3 X_t = R_t_h * X_h + T_t_h.translation();
+    const Vec3 X_t = (Rx_c + kPattern[k][0] * R_du + kPattern[k][1] * R_dv) * inv_rho + T_t_h.translation();
     if (X_t.z() <= 1e-6) return false;
     const double iz = 1.0 / X_t.z();
     const double ut = cam_.fx * X_t.x() * iz + cam_.cx, vt = cam_.fy * X_t.y() * iz + cam_.cy;
@@ -98,6 +101,8 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
     if (J) {
       // First-estimate Jacobians: the geometry (projection, frame poses, brightness) at the frames'
       // linearization points; only the image gradient is taken at the current projection.
+      const Vec3 x_h = cam_.pinholeRay(uk, vk);
+      const Vec3 X_h = x_h * inv_rho;
       const PairTransforms& G = lin ? *lin->pairs : pairs;
       const BaFrame& Hg = lin ? (*lin->frames)[host] : H;
       const Vec3 X_g = lin ? Vec3(G.R_t_h[pi] * X_h + G.T_t_h[pi].translation()) : X_t;
