@@ -239,7 +239,8 @@ FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3&
   // The routine second start (both alignments fine so far) needs the fine levels only, like the first.
   std::vector<std::pair<SE3, int>> others;  // start, pyramid levels (0: all)
   const bool usual = tr.ok && !(tr.rmse > 1.15 * last_rmse_);
-  if (prior && (cfg_.frame_always_tries_cv || !usual))
+  const double cv_distance = (T_w_cv.inverse() * (T_w_kf_ * T_f_kf.inverse())).log().norm();
+  if (prior && ((cfg_.frame_always_tries_cv && cv_distance >= cfg_.frame_cv_min_distance) || !usual))
     others.emplace_back(T_w_cv, usual ? cfg_.prior_levels : 0);
   if (!tr.ok) {
     others.emplace_back(last_T_w_f_, 0);

@@ -15,6 +15,10 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
         "Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
   if (!(cfg.event_anchor_max_gap_s >= 0) || !(cfg.event_anchor_max_interval_s >= 0))
     throw std::invalid_argument("Odometry: event_anchor_max_interval_s and max_gap_s must not be negative");
+  if (!(cfg.frame_cv_min_distance >= 0) || !(cfg.frame_tracker.min_step >= 0) ||
+      !(cfg.bootstrap.tracker.min_step >= 0))
+    throw std::invalid_argument(
+        "Odometry: frame_cv_min_distance and the frame trackers' min_step must not be negative");
   const RecoveryConfig& r = cfg.recovery;
   const RelocalizerConfig& rl = r.relocalizer;
   if (!(r.gap_s > 0) || r.failed_frames < 1 || !(r.max_refinement > 0) || r.new_map_after_frames < 1 ||
