@@ -82,7 +82,7 @@ TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
       "%%, rotation drift %.2f deg (dropping the oldest keyframe: %.2f deg)\n",
       toSeconds(r.init_t - r.first_t), r.keyframes.size(), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100,
       drift, drift_oldest);
-  test::expectAccuracy("ECD slider_depth, frames only, refined", a, {0.382, 0.884});
+  test::expectAccuracy("ECD slider_depth, frames only, refined", a, {0.394, 0.967});
   EXPECT_GE(a.coverage, 0.9);
   EXPECT_LE(drift, 1.5 * 1.14);
   EXPECT_GE(drift_oldest, 3.0);
