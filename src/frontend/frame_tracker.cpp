@@ -119,6 +119,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   const int start = levels > 0 ? std::min(levels, cfg_.levels) - 1 : cfg_.levels - 1;
   for (int l = start; l >= 0; --l) {
     LmDamping lm(kLambdaInitial, kLambdaFloor);
+    ++res.evaluations;
     if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
     double c0 = cost(r);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
@@ -138,6 +139,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
         if (!delta.allFinite()) break;
         const SE3 T_new = SE3::exp(delta.head<6>()) * T;
         const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
+        ++res.evaluations;
         if (evaluate(l, img[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
           lm.rejected();
           continue;

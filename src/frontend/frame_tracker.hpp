@@ -35,6 +35,7 @@ struct FrameTrackResult {
   double rmse = 0;    // robust residual RMSE at the finest level, intensity units
   int residuals = 0;  // in view at the finest level
   int iterations = 0;
+  int evaluations = 0;  // residual evaluations over all levels: what the alignment cost
 };
 
 class FrameTracker {

@@ -109,6 +109,19 @@ TEST(FrameTracker, RecoversAKnownMotionOfAPlane) {
   EXPECT_LT((T.so3().inverse() * T_f_kf.so3()).angle() * 180 / M_PI, 0.05);
   EXPECT_NEAR(a, 1.1, 0.03);
   EXPECT_NEAR(b, 0.02, 0.02);
+  // min_step ends a level at a tiny rejected step instead of retrying it with more damping: fewer
+  // evaluations, the same pose.
+  FrameTrackerConfig quick;
+  quick.min_step = 1e-5;
+  SE3 Tq;
+  double aq = 1, bq = 0;
+  FrameTracker fq(cam, quick);
+  fq.setKeyframe(planeKeyframe(img));
+  const FrameTrackResult rq = fq.track(frame, Tq, aq, bq);
+  std::printf("[ frame tracker ] %d evaluations, %d with min_step 1e-5\n", res.evaluations, rq.evaluations);
+  EXPECT_TRUE(rq.ok);
+  EXPECT_LT(rq.evaluations, res.evaluations);
+  EXPECT_LT((Tq.inverse() * T).log().norm(), 1e-5);
 }
 
 }  // namespace
