@@ -79,6 +79,10 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
   expectError("run " + esim() + runOut() + " --set recovery.relocalizer.min_inliers=3",
               "min_inliers >= 4 (a pose needs 4 points)");
   expectError("run " + esim() + runOut() + " --frame-rate -1", "must not be negative");
+  expectError("run " + esim() + runOut() + " --set frame_tracker.min_step=-1e-5",
+              "the frame trackers' min_step must not be negative");
+  expectError("run " + esim() + runOut() + " --set frame_cv_min_distance=-0.01",
+              "frame_cv_min_distance and the frame trackers' min_step must not be negative");
   expectError("run " + esim() + runOut() + " --start 100", "no frame in the requested time range");
 }
 
