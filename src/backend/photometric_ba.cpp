@@ -489,6 +489,30 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
   }
 }
 
+void PhotometricBA::denseNormalEquations(const std::vector<BaFrame>& frames,
+                                         const std::vector<BaPoint>& points, Eigen::MatrixXd& H,
+                                         Eigen::VectorXd& b) const {
+  const int F = static_cast<int>(frames.size());
+  const auto np = static_cast<Eigen::Index>(points.size());
+  std::vector<int> slot(F);
+  for (int f = 0; f < F; ++f) slot[f] = f;
+  const int dim = F * kFrameParams;
+  std::vector<double> rho(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) rho[i] = points[i].inv_depth;
+  NormalEquations ne;
+  accumulate(frames, points, rho, hostPatterns(frames, points), slot, dim, ne, nullptr);
+  H = Eigen::MatrixXd::Zero(dim + np, dim + np);
+  b = Eigen::VectorXd::Zero(dim + np);
+  H.topLeftCorner(dim, dim) = ne.Hff;
+  H.topRightCorner(dim, np) = ne.Hfp;
+  H.bottomLeftCorner(np, dim) = ne.Hfp.transpose();
+  b.head(dim) = ne.bf;
+  for (Eigen::Index i = 0; i < np; ++i) {
+    H(dim + i, dim + i) = ne.Hpp[i];
+    b(dim + i) = ne.bp[i];
+  }
+}
+
 BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
                                    const BaPrior* prior, int m) const {
   const int F = static_cast<int>(frames.size());

@@ -111,6 +111,11 @@ class PhotometricBA {
   std::vector<double> patternRms(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
                                  int target) const;
 
+  // For tests: the normal equations JᵀWJ and JᵀWr the solve builds, dense over every frame (8
+  // parameters each, fixed or not, in order) and then every point's inverse depth.
+  void denseNormalEquations(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
+                            Eigen::MatrixXd& H, Eigen::VectorXd& b) const;
+
  private:
   // The residuals of one point in one target at inverse depth rho (evaluate() without the point).
   // host_values: the 8 host intensities (HostPattern::I), or null to sample them.

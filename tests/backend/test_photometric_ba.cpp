@@ -130,6 +130,64 @@ TEST(PhotometricBA, JacobianMatchesNumericDifferencesInEveryColumn) {
   }
 }
 
+// The normal equations the solve builds (blocks assembled from one Gram matrix per point and target)
+// equal JᵀJ and Jᵀr of evaluate()'s Jacobian, checked itself above: three frames with different
+// brightness (so that e^(a_t − a_h) ≠ 1 in the host's and the cross terms), points hosted in each,
+// robust and gradient weights at 1.
+TEST(PhotometricBA, NormalEquationsAreTheJacobiansGram) {
+  const Scene& s = scene();
+  const int F = 3;
+  std::vector<BaFrame> frames = framesAtTruth(s, F);
+  const double a[F] = {0.1, -0.15, 0.05}, b[F] = {0.02, -0.03, 0.01};
+  for (int f = 0; f < F; ++f) frames[f].a = a[f], frames[f].b = b[f];
+  std::mt19937 rng(5);
+  std::vector<BaPoint> pts;
+  for (int host = 0; host < F; ++host) {
+    const std::vector<BaPoint> p = pointsOf(s, host, 0.03, rng, F);
+    for (std::size_t i = 0; i < p.size(); i += 5) pts.push_back(p[i]);
+  }
+  BaConfig cfg;
+  cfg.huber = cfg.grad_weight_c = 1e9;
+  const PhotometricBA ba(camera(), cfg);
+  Eigen::MatrixXd H;
+  Eigen::VectorXd g;
+  ba.denseNormalEquations(frames, pts, H, g);
+  const auto n = static_cast<Eigen::Index>(8 * F + pts.size());
+  Eigen::MatrixXd Hn = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd gn = Eigen::VectorXd::Zero(n);
+  int pairs = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    for (int t : pts[i].targets) {
+      Eigen::Matrix<double, 8, 1> r;
+      Eigen::Matrix<double, 8, 17> J;
+      if (!ba.evaluate(frames, pts[i], t, r, &J)) continue;
+      Eigen::MatrixXd Jf = Eigen::MatrixXd::Zero(8, n);
+      Jf.middleCols<8>(8 * pts[i].host) = J.leftCols<8>();
+      Jf.middleCols<8>(8 * t) = J.middleCols<8>(8);
+      Jf.col(8 * F + static_cast<Eigen::Index>(i)) = J.col(16);
+      Hn += Jf.transpose() * Jf;
+      gn += Jf.transpose() * r;
+      ++pairs;
+    }
+  }
+  ASSERT_GT(pairs, 100);
+  ASSERT_EQ(H.rows(), n);
+  const double scale = Hn.cwiseAbs().maxCoeff();
+  EXPECT_LT((H - Hn).cwiseAbs().maxCoeff(), 1e-9 * scale);
+  // Block by block, so that a wrong small block (the brightness offsets') is not lost in the norm.
+  for (int f = 0; f < F; ++f)
+    for (int h = 0; h < F; ++h) {
+      const Eigen::MatrixXd d = H.block<8, 8>(8 * f, 8 * h) - Hn.block<8, 8>(8 * f, 8 * h);
+      EXPECT_LT(d.norm(), 1e-9 * (1.0 + Hn.block<8, 8>(8 * f, 8 * h).norm())) << f << "," << h;
+      EXPECT_LT((g.segment<8>(8 * f) - gn.segment<8>(8 * f)).norm(),
+                1e-9 * (1.0 + gn.segment<8>(8 * f).norm()))
+          << "frame " << f;
+    }
+  EXPECT_LT((g.tail(n - 8 * F) - gn.tail(n - 8 * F)).norm(), 1e-9 * (1.0 + gn.norm()));
+  std::printf("[ BA normal equations ] %d pairs, worst |H - JᵀJ| %.2e of %.2e\n", pairs,
+              (H - Hn).cwiseAbs().maxCoeff(), scale);
+}
+
 // The residual itself: with both frames at one pose and one image, the geometry cancels and only the
 // affine brightness model remains, r = I - b_t - e^(a_t - a_h) (I - b_h), at any depth.
 TEST(PhotometricBA, ResidualIsTheAffineBrightnessModel) {
