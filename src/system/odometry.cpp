@@ -13,7 +13,7 @@
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
-#include "frontend/event_packets.hpp"
+#include "system/event_frame_producer.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/odometry_core.hpp"
 #include "system/run_stats.hpp"
@@ -38,11 +38,8 @@ class Odometry::Impl {
         cfg_(validated(cfg, camera)),
         listener_(listener),
         core_(camera, cfg_, res_, clock_),
-        builder_(core_.undistorter(), cfg_.event_frame),
-        n_(static_cast<std::size_t>(cfg_.event_frame.num_events)),
-        starts_(cfg_.event_frame.stride(), cfg_.event_frame.max_rate_hz),
-        lookahead_(cfg_.event_frame.lookahead()),
-        flicker_(camera.width, camera.height, cfg_.flicker_filter) {}
+        producer_(core_.undistorter(), cfg_.event_frame, cfg_.flicker_filter,
+                  cfg_.use_events && cfg_.stream.event_thread, &clock_) {}
 
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
     const ScopedStage api(&clock_, Stage::kUnaccounted);
@@ -67,17 +64,7 @@ class Odometry::Impl {
     checked_t_ = prev;
     events_in_ += end - begin;
     intake.reset();
-    for (std::size_t i = begin; i < end;) {
-      // Appends no more than the next packet needs, so that every packet is built as soon as it can
-      // be whatever the chunk size (the same event frames, in the same order).
-      const std::size_t need =
-          pos_ + n_ + lookahead_ > buf_.size() ? pos_ + n_ + lookahead_ - buf_.size() : 1;
-      const std::size_t k = std::min(end - i, need);
-      append(ev, i, i + k);
-      i += k;
-      buildPackets(false);
-      dispatch(false);
-    }
+    producer_.add(ev, begin, end, [this] { dispatch(false); });
   }
 
   void addFrame(TimeNs t, const cv::Mat& gray8) {
@@ -105,9 +92,12 @@ class Odometry::Impl {
     const ScopedStage api(&clock_, Stage::kUnaccounted);
     checkOpen();
     finished_ = true;
-    buildPackets(true);
+    producer_.finish();
     dispatch(true);
     core_.finish();
+    res_.events_flicker_dropped = producer_.flickerDropped();
+    res_.event_thread = producer_.threaded();
+    if (res_.event_thread) res_.event_stages_s = producer_.threadStageSeconds();
     const ScopedStage results(&clock_, Stage::kResults);
     TimeNs last_t = core_.lastTime();
     if (!res_.events.empty()) last_t = std::max(last_t, res_.events.back().t);
@@ -135,42 +125,11 @@ class Odometry::Impl {
     if (finished_) throw std::logic_error("Odometry: used after finish()");
   }
 
-  void append(const EventArray& ev, std::size_t a, std::size_t b) {
-    const ScopedStage stage(&clock_, Stage::kEventIntake);
-    if (pos_ > (1u << 20)) compact();
-    for (std::size_t i = a; i < b; ++i)
-      if (flicker_.keep(ev.t[i], ev.x[i], ev.y[i], ev.p[i]))
-        buf_.push_back(ev.t[i], ev.x[i], ev.y[i], ev.p[i]);
-    res_.events_flicker_dropped = flicker_.dropped();
-    if (b > a) newest_t_ = ev.t[b - 1];
-  }
-
-  // Drops the events before the next packet: the builder's per-pixel memory has run past them.
-  void compact() {
-    eraseFront(buf_, pos_);
-    base_ += pos_;
-    pos_ = 0;
-  }
-
-  // Every packet whose events (and lookahead) have arrived; at the end, every complete packet.
-  void buildPackets(bool at_end) {
-    const ScopedStage stage(&clock_, Stage::kEventFrames);
-    for (;;) {
-      starts_.skip(buf_, pos_);
-      if (buf_.size() < pos_ + n_ + (at_end ? 0 : lookahead_)) break;
-      EventFrame ef;
-      if (!spare_.empty()) {
-        ef = std::move(spare_.back());
-        spare_.pop_back();
-      }
-      builder_.build(buf_, pos_, ef, base_);
-      efs_.push_back(std::move(ef));
-      starts_.advance(buf_, pos_);
-    }
-  }
-
-  // Processes waiting items in time order while the order is certain (or a wait ran out).
+  // Processes waiting items in time order while the order is certain (or a wait ran out). With the
+  // producer thread, what it has not built yet is unknown: an uncertain item waits like without it,
+  // and before a wait runs out the producer finishes its queue, so that the same decision is taken.
   void dispatch(bool at_end) {
+    producer_.take(efs_);
     while (!frames_.empty() || !efs_.empty()) {
       if (!frames_.empty() && !efs_.empty()) {
         if (frames_.front().t <= efs_.front().t)
@@ -178,18 +137,30 @@ class Odometry::Impl {
         else
           processEventFrame();
       } else if (!frames_.empty()) {
-        const bool events_past =
-            !cfg_.use_events || (pos_ < buf_.size() && buf_.t[pos_] >= frames_.front().t);
-        if (!(at_end || events_past ||
-              frames_.size() > static_cast<std::size_t>(cfg_.stream.max_pending_frames)))
-          return;
+        const bool events_past = !cfg_.use_events || producer_.nextPacketStartsAtOrAfter(frames_.front().t);
+        if (!(at_end || events_past)) {
+          if (frames_.size() <= static_cast<std::size_t>(cfg_.stream.max_pending_frames)) return;
+          if (!producer_.idle()) {
+            producer_.drain(efs_);
+            continue;
+          }
+        }
         processFrame();
       } else {
         const TimeNs t = efs_.front().t;
         const bool frame_past = has_frame_in_ && last_frame_in_ >= t;
-        if (!(at_end || frame_past || newest_t_ - t > fromSeconds(cfg_.stream.max_frame_wait_s))) return;
+        const TimeNs wait = fromSeconds(cfg_.stream.max_frame_wait_s);
+        if (!(at_end || frame_past)) {
+          if (checked_t_ - t <= wait) return;  // no wait can have run out
+          if (!producer_.idle()) {
+            producer_.drain(efs_);
+            continue;
+          }
+          if (producer_.newestEvent() - t <= wait) return;
+        }
         processEventFrame();
       }
+      producer_.take(efs_);
     }
   }
 
@@ -215,7 +186,7 @@ class Odometry::Impl {
       }
       notify();
     }
-    spare_.push_back(std::move(ef));
+    producer_.recycle(std::move(ef));
   }
 
   // Tells the listener what the last item produced.
@@ -246,21 +217,13 @@ class Odometry::Impl {
   OdometryResult res_;
   StageClock clock_{Stage::kInput};  // the calling thread's
   OdometryCore core_;
-  EventFrameBuilder builder_;
-  std::size_t n_;
-  PacketStarts starts_;
-  std::size_t lookahead_;
-  // Events not yet in a packet (from pos_ on) and the packets' lookahead; base_: stream index of buf_[0].
-  EventArray buf_;
-  FlickerFilter flicker_;  // in front of buf_: flickering pixels' events never enter it
-  std::size_t pos_ = 0, events_in_ = 0;
-  std::uint64_t base_ = 0;
-  // The newest event validated (the chunk being added) and the newest appended to buf_ (the waits
-  // measure from it, so that they do not depend on the chunk size).
-  TimeNs checked_t_ = std::numeric_limits<TimeNs>::min(), newest_t_ = std::numeric_limits<TimeNs>::min();
+  EventFrameProducer producer_;  // flicker filter, event buffer, event frames
+  std::size_t events_in_ = 0;
+  // The newest event checked (the waits measure from the newest the producer has processed, so that
+  // they do not depend on the chunk size).
+  TimeNs checked_t_ = std::numeric_limits<TimeNs>::min();
   std::deque<PendingFrame> frames_;
   std::deque<EventFrame> efs_;
-  std::vector<EventFrame> spare_;  // processed event frames, their images reused
   bool has_frame_in_ = false, has_first_ = false, finished_ = false;
   TimeNs last_frame_in_ = 0, last_frame_done_ = std::numeric_limits<TimeNs>::min();
   bool told_init_ = false;

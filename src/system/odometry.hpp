@@ -60,9 +60,12 @@ EDS_FIELDS(FlowKeyframePolicyConfig, flow_t, flow_rt, min_in_view, max_log_alpha
 struct StreamConfig {
   double max_frame_wait_s = 0.2;  // event time: how long an event frame waits for a frame before it
   int max_pending_frames = 8;     // frames waiting for events; one more and the oldest goes ahead
+  // Event intake and event-frame building on a thread of their own, beside the tracking (the same
+  // results; off: all on the thread that feeds the odometry).
+  bool event_thread = true;
 };
 
-EDS_FIELDS(StreamConfig, max_frame_wait_s, max_pending_frames)
+EDS_FIELDS(StreamConfig, max_frame_wait_s, max_pending_frames, event_thread)
 
 // When the track is lost (frames or event frames came but gave no pose for `gap_s`, or `failed_frames`
 // frame alignments failed in a row), each usable frame is relocalized against the newest keyframe (features,
@@ -211,6 +214,8 @@ struct OdometryResult {
   // Wall time by stage of the thread that fed the odometry (they add up to wall_s), and of the
   // threaded back-end's thread (zeros without one).
   StageSeconds stages_s{}, backend_stages_s{};
+  bool event_thread = false;  // event frames were built on a thread of their own, whose stages follow
+  StageSeconds event_stages_s{};
   double peak_rss_mb = 0;
   // Stopped on request before the end of the input (what was computed so far is in the result).
   bool interrupted = false;

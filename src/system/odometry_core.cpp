@@ -313,8 +313,8 @@ void OdometryCore::finish() {
   Trajectory aligned_frames;
   for (std::size_t i = 0; i < res_.frames_refined.size() && i < frame_ok_.size(); ++i)
     if (frame_ok_[i]) aligned_frames.push_back(res_.frames_refined[i]);
-  res_.events_refined = smoothPoses(
-      refinedTrajectory(res_.events, res_.event_anchors, retired_keyframes_), cfg_.event_smoothing_s);
+  res_.events_refined = smoothPoses(refinedTrajectory(res_.events, res_.event_anchors, retired_keyframes_),
+                                    cfg_.event_smoothing_s);
   std::vector<TimeNs> intervals;
   for (std::size_t i = 1; i < aligned_frames.size(); ++i)
     intervals.push_back(aligned_frames[i].t - aligned_frames[i - 1].t);

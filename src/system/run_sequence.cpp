@@ -261,6 +261,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
   // The thread that fed the odometry; the back-end's own thread, when it has one, runs beside it.
   j["stages"] = stagesJson(r.stages_s);
   if (cfg.threaded_backend) j["backend_thread_stages"] = stagesJson(r.backend_stages_s);
+  if (r.event_thread) j["event_thread_stages"] = stagesJson(r.event_stages_s);
   if (cfg.use_events) {
     const ClockOffsetEstimate off = estimateEventClockOffset(r.frames, r.events);
     if (off.valid)

@@ -20,6 +20,7 @@ enum class Stage : std::size_t {
   kMapping,           // a new keyframe's points and depths
   kBundleAdjustment,  // the sliding-window solve
   kWaiting,           // for the threaded back-end
+  kWaitingForEvents,  // for the event-frame producer thread
   kResults,           // listener calls, the refined trajectories at the end
   kIdle,              // the back-end thread with nothing to do
   kUnaccounted,
@@ -28,10 +29,20 @@ enum class Stage : std::size_t {
 inline constexpr std::size_t kStageCount = static_cast<std::size_t>(Stage::kCount);
 
 inline const char* stageName(Stage s) {
-  static constexpr const char* kNames[kStageCount] = {
-      "input",          "event_intake", "event_frames", "event_tracking",    "frame_preparation",
-      "frame_tracking", "bootstrap",    "mapping",      "bundle_adjustment", "waiting_for_backend",
-      "results",        "idle",         "unaccounted"};
+  static constexpr const char* kNames[kStageCount] = {"input",
+                                                      "event_intake",
+                                                      "event_frames",
+                                                      "event_tracking",
+                                                      "frame_preparation",
+                                                      "frame_tracking",
+                                                      "bootstrap",
+                                                      "mapping",
+                                                      "bundle_adjustment",
+                                                      "waiting_for_backend",
+                                                      "waiting_for_events",
+                                                      "results",
+                                                      "idle",
+                                                      "unaccounted"};
   return kNames[static_cast<std::size_t>(s)];
 }
 

@@ -74,9 +74,14 @@ void expectStagesAccountForTheWallTime(const OdometryResult& r, bool threaded) {
   EXPECT_LE(sum, r.wall_s);
   EXPECT_GE(sum, 0.99 * r.wall_s);
   EXPECT_LT(at(r.stages_s, Stage::kUnaccounted), 0.1 * r.wall_s);
-  for (Stage st : {Stage::kInput, Stage::kEventIntake, Stage::kEventFrames, Stage::kEventTracking,
-                   Stage::kFramePreparation, Stage::kFrameTracking, Stage::kBootstrap})
+  for (Stage st : {Stage::kInput, Stage::kEventIntake, Stage::kEventTracking, Stage::kFramePreparation,
+                   Stage::kFrameTracking, Stage::kBootstrap})
     EXPECT_GT(at(r.stages_s, st), 0.0) << stageName(st);
+  // Event frames are built where the producer runs: its own thread (by default), or the feeding one.
+  EXPECT_TRUE(r.event_thread);
+  EXPECT_GT(at(r.event_stages_s, Stage::kEventFrames), 0.0);
+  EXPECT_GT(at(r.event_stages_s, Stage::kEventIntake), 0.0);
+  EXPECT_EQ(at(r.stages_s, Stage::kEventFrames), 0.0);
   // Mapping and the solve run where the back-end runs: its own thread, or the feeding one.
   const StageSeconds& backend = threaded ? r.backend_stages_s : r.stages_s;
   const StageSeconds& other = threaded ? r.stages_s : r.backend_stages_s;
@@ -102,14 +107,20 @@ TEST(OdometryApi, EventChunksOf1And1000And100000GiveTheOutputsOfEdsRun) {
   ASSERT_GT(ref.events.size(), 400u);
   writeOdometryOutputs(out / "run", ref, cfg);
   const EventArray ev = allEvents(seq);
+  // The event frames built on a producer thread (the default) or on the feeding one: the same.
   struct Feed {
     std::size_t chunk;
-    bool frames_early;
+    bool frames_early, event_thread;
   };
-  for (const Feed fd : {Feed{1, false}, Feed{1000, false}, Feed{100000, false}, Feed{1000, true}}) {
-    Odometry odo(seq.camera(), cfg);
+  for (const Feed fd : {Feed{1, false, false}, Feed{1000, false, true}, Feed{100000, false, true},
+                        Feed{100000, false, false}, Feed{1000, true, true}, Feed{1000, true, false}}) {
+    OdometryConfig c = cfg;
+    c.stream.event_thread = fd.event_thread;
+    Odometry odo(seq.camera(), c);
     const OdometryResult& r = feed(odo, seq, ev, fd.chunk, fd.frames_early);
-    const std::string name = "chunk" + std::to_string(fd.chunk) + (fd.frames_early ? "_frames_early" : "");
+    EXPECT_EQ(r.event_thread, fd.event_thread);
+    const std::string name = "chunk" + std::to_string(fd.chunk) + (fd.frames_early ? "_frames_early" : "") +
+                             (fd.event_thread ? "" : "_one_thread");
     EXPECT_EQ(r.event_frames, ref.event_frames) << name;
     EXPECT_EQ(r.failures.size(), ref.failures.size()) << name;
     writeOdometryOutputs(out / name, r, cfg);
