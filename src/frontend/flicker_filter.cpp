@@ -9,9 +9,7 @@ FlickerFilter::FlickerFilter(int width, int height, const FlickerFilterConfig& c
     : cfg_(cfg),
       width_(width),
       inv_leak_ns_(1.0 / (cfg.leak_ms * 1e6)),
-      last_p_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0),
-      last_reversal_(last_p_.size(), std::numeric_limits<TimeNs>::min() / 2),
-      score_(last_p_.size(), 0.0f) {
+      pixels_(static_cast<std::size_t>(width) * static_cast<std::size_t>(height)) {
   if (cfg.enabled && !(cfg.leak_ms > 0 && cfg.score > 0))
     throw std::invalid_argument("flicker filter: leak_ms and score must be > 0");
 }

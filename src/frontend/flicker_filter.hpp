@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "core/reflect.hpp"
@@ -28,16 +29,16 @@ class FlickerFilter {
   // Whether the event is kept; events must come in time order.
   bool keep(TimeNs t, int x, int y, int polarity) {
     if (!cfg_.enabled) return true;
-    const std::size_t i =
-        static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x);
-    if (polarity != last_p_[i]) {
-      const double leak = static_cast<double>(t - last_reversal_[i]) * inv_leak_ns_;
+    Pixel& px =
+        pixels_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x)];
+    if (polarity != px.last_p) {
+      const double leak = static_cast<double>(t - px.last_reversal) * inv_leak_ns_;
       // Capped at twice the threshold, so a pixel is free again soon after the light stops.
-      score_[i] = static_cast<float>(std::min(std::max(0.0, score_[i] - leak) + 1.0, 2.0 * cfg_.score));
-      last_reversal_[i] = t;
-      last_p_[i] = static_cast<std::int8_t>(polarity);
+      px.score = static_cast<float>(std::min(std::max(0.0, px.score - leak) + 1.0, 2.0 * cfg_.score));
+      px.last_reversal = t;
+      px.last_p = static_cast<std::int8_t>(polarity);
     }
-    const bool kept = score_[i] <= cfg_.score;
+    const bool kept = px.score <= cfg_.score;
     dropped_ += !kept;
     return kept;
   }
@@ -47,9 +48,13 @@ class FlickerFilter {
   FlickerFilterConfig cfg_;
   int width_;
   double inv_leak_ns_;
-  std::vector<std::int8_t> last_p_;
-  std::vector<TimeNs> last_reversal_;
-  std::vector<float> score_;
+  // One pixel's state in one place: a single cache line per event at large sensor sizes.
+  struct Pixel {
+    TimeNs last_reversal = std::numeric_limits<TimeNs>::min() / 2;
+    float score = 0;
+    std::int8_t last_p = 0;
+  };
+  std::vector<Pixel> pixels_;
   std::size_t dropped_ = 0;
 };
 

@@ -80,8 +80,15 @@ void EventFrameProducer::append(const EventArray& ev, std::size_t a, std::size_t
     base_ += pos_;
     pos_ = 0;
   }
-  for (std::size_t i = a; i < b; ++i)
-    if (flicker_.keep(ev.t[i], ev.x[i], ev.y[i], ev.p[i])) buf_.push_back(ev.t[i], ev.x[i], ev.y[i], ev.p[i]);
+  // Sized for all, then cut to those kept: no capacity check per event.
+  std::size_t n = buf_.size();
+  buf_.resize(n + (b - a));
+  for (std::size_t i = a; i < b; ++i) {
+    if (!flicker_.keep(ev.t[i], ev.x[i], ev.y[i], ev.p[i])) continue;
+    buf_.t[n] = ev.t[i], buf_.x[n] = ev.x[i], buf_.y[n] = ev.y[i], buf_.p[n] = ev.p[i];
+    ++n;
+  }
+  buf_.resize(n);
   if (b > a) newest_appended_ = ev.t[b - 1];
 }
 
