@@ -112,9 +112,11 @@ void OdometryCore::eventFrame(const EventFrame& ef) {
   ++res_.event_frames;
   if (!initialized_) {
     // Kept until the map exists, then tracked (poses from the bootstrap's reference frame on: older
-    // ones are dropped at once, which bounds the buffer by the bootstrap's span).
+    // ones are dropped at once, which bounds the buffer by the bootstrap's span). In half precision:
+    // a second of them at 640x480 is 60 MB so (the values have unit norm; 11 bits suffice).
     pruneBuffered();
-    buffered_.push_back({ef.t, ef.t_first, ef.t_last, ef.delta.clone()});
+    buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
+    ef.delta.convertTo(buffered_.back().delta, CV_16F);
     if (boot_events_ && boot_events_->hasReference()) {
       if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
         boot_event_ = {ef.t, *T};
@@ -189,8 +191,11 @@ constexpr double kMaxSpeedup = 4.0;
 // bootstrap's pose at its time.
 void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
   StampedPose last{boot_traj.front().t, boot_traj.front().T_w_c};  // the last accepted pose
-  for (EventFrame& ef : buffered_) {
-    if (ef.t < boot_traj.front().t) continue;
+  EventFrame ef;
+  for (const EventFrame& half : buffered_) {
+    if (half.t < boot_traj.front().t) continue;
+    ef.t = half.t, ef.t_first = half.t_first, ef.t_last = half.t_last;
+    half.delta.convertTo(ef.delta, CV_32F);
     const SE3 prior = poseAt(boot_traj, ef.t);
     // The frames bracket each of these event frames: a result far from their interpolation (more
     // than half the motion between the two frames, plus a margin) is a wrong minimum, not motion.
