@@ -122,6 +122,9 @@ struct OdometryConfig {
   // poses; results farther than half the motion between the bracketing frames plus these margins are
   // rejected (translation in map units: the bootstrap's mean inverse depth is 1).
   double buffered_gate_translation = 0.002, buffered_gate_rotation_deg = 0.2;
+  // Memory for those event frames: beyond it they are thinned to twice their mean spacing (evenly, so
+  // that their poses still span the bootstrap), which bounds the memory of a long bootstrap at any size.
+  double buffered_max_mb = 128;
   // The refined event-rate positions (trajectory_events.txt): a local quadratic fit over ±this many
   // seconds (system/trajectory_smoothing.hpp; 0: as composed). The live poses are never smoothed.
   double event_smoothing_s = 0.06;
@@ -138,8 +141,8 @@ struct OdometryConfig {
 EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, frame_cv_min_distance, mapping, backend, policy, threaded_backend,
            wait_for_keyframe, use_events, flicker_filter, event_frame, events, buffered_gate_translation,
-           buffered_gate_rotation_deg, event_smoothing_s, event_anchor_max_interval_s, event_anchor_max_gap_s,
-           recovery, frame_rate, start_s, duration_s)
+           buffered_gate_rotation_deg, buffered_max_mb, event_smoothing_s, event_anchor_max_interval_s,
+           event_anchor_max_gap_s, recovery, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;
@@ -200,6 +203,7 @@ struct OdometryResult {
   std::size_t events_flicker_dropped = 0;  // events of flickering pixels, never put into event frames
   std::size_t frames_rejected = 0;         // kept out by the frame quality check (each one also a failure)
   std::size_t backend_waits = 0;           // times the tracking thread waited for the threaded back-end
+  std::size_t buffered_thinned = 0;        // times the event frames kept during the bootstrap were thinned
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization
   TimeNs first_t = 0;  // first frame considered

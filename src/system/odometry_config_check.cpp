@@ -15,6 +15,9 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
         "Odometry: stream.max_frame_wait_s and stream.max_pending_frames must not be negative");
   if (!(cfg.event_anchor_max_gap_s >= 0) || !(cfg.event_anchor_max_interval_s >= 0))
     throw std::invalid_argument("Odometry: event_anchor_max_interval_s and max_gap_s must not be negative");
+  if (!(cfg.buffered_max_mb > 0))
+    throw std::invalid_argument("Odometry: buffered_max_mb must be > 0, got " +
+                                std::to_string(cfg.buffered_max_mb));
   if (!(cfg.frame_cv_min_distance >= 0) || !(cfg.frame_tracker.min_step >= 0) ||
       !(cfg.bootstrap.tracker.min_step >= 0))
     throw std::invalid_argument(

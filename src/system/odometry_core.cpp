@@ -115,8 +115,11 @@ void OdometryCore::eventFrame(const EventFrame& ef) {
     // ones are dropped at once, which bounds the buffer by the bootstrap's span). In half precision:
     // a second of them at 640x480 is 60 MB so (the values have unit norm; 11 bits suffice).
     pruneBuffered();
-    buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
-    ef.delta.convertTo(buffered_.back().delta, CV_16F);
+    if (buffered_.empty() || ef.t - buffered_.back().t >= buffered_min_dt_) {
+      buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
+      ef.delta.convertTo(buffered_.back().delta, CV_16F);
+      thinBuffered();
+    }
     if (boot_events_ && boot_events_->hasReference()) {
       if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
         boot_event_ = {ef.t, *T};
@@ -176,6 +179,7 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   odo_->adoptReference(true);
   syncReference();
   buffered_.clear();
+  buffered_min_dt_ = 0;
   // The bootstrap's last two frames start the motion prior (and the tracking) of the live events.
   const std::size_t n = res_.frames.size();
   if (n >= 2) events_->correct(res_.frames[n - 2].t, res_.frames[n - 2].T_w_c);
@@ -275,6 +279,7 @@ void OdometryCore::startSegment(TimeNs t) {
   events_ = std::make_unique<EventFrontend>(und_.pinhole(), cfg_.events);
   boot_events_.reset();
   buffered_.clear();
+  buffered_min_dt_ = 0;
   initialized_ = lost_ = has_boot_event_ = has_event_pose_ = false;
   boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_id_ = -1;
   failed_in_row_ = inputs_without_pose_ = 0;
@@ -329,6 +334,22 @@ void OdometryCore::finish() {
       res_.events_refined = anchorToFrames(res_.events_refined, aligned_frames,
                                            fromSeconds(cfg_.event_anchor_max_gap_s), segmentStartTimes(res_));
   }
+}
+
+void OdometryCore::thinBuffered() {
+  const double bytes = static_cast<double>(buffered_.size()) *
+                       static_cast<double>(buffered_.back().delta.total()) *
+                       static_cast<double>(buffered_.back().delta.elemSize());
+  if (bytes <= cfg_.buffered_max_mb * 1024 * 1024 || buffered_.size() < 2) return;
+  // Twice the mean spacing from now on, for the frames kept and those to come: they stay evenly spread.
+  buffered_min_dt_ =
+      2 * (buffered_.back().t - buffered_.front().t) / static_cast<TimeNs>(buffered_.size() - 1);
+  std::size_t kept = 1;
+  for (std::size_t i = 1; i < buffered_.size(); ++i)
+    if (buffered_[i].t - buffered_[kept - 1].t >= buffered_min_dt_)
+      buffered_[kept++] = std::move(buffered_[i]);
+  buffered_.resize(kept);
+  ++res_.buffered_thinned;
 }
 
 void OdometryCore::pruneBuffered() {

@@ -46,6 +46,7 @@ class OdometryCore {
   void startSegment(TimeNs t);
   void retireSegment();
   void pruneBuffered();
+  void thinBuffered();  // the buffered event frames thinned when they exceed buffered_max_mb
   void syncBootstrapEvents(TimeNs t);
   void syncReference();
   void trackEvents(const EventFrame& ef, const SE3* prior,
@@ -65,6 +66,7 @@ class OdometryCore {
   bool initialized_ = false;  // the current segment's map exists
   int event_ref_id_ = -1;
   std::vector<EventFrame> buffered_;
+  TimeNs buffered_min_dt_ = 0;                // spacing of the buffered event frames once they were thinned
   std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
   TimeNs boot_ref_t_ = -1;
   int boot_restarts_ = -1;

@@ -247,7 +247,8 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"event_poses", r.events.size()},
                  {"keyframes", r.keyframes.size()},
                  {"map_points", r.map.size()},
-                 {"backend_waits", r.backend_waits}};
+                 {"backend_waits", r.backend_waits},
+                 {"bootstrap_event_frames_thinned", r.buffered_thinned}};
   j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},
                      {"event_tracking", timingStats(r.event_track_ms)},
                      {"mapping", timingStats(r.mapping_ms)},
