@@ -270,10 +270,12 @@ class OdometryListener {
 // Threading contract: an Odometry is used from one thread at a time (any thread; calls from several
 // threads must be serialized by the caller). The work happens inside the calling thread's addEvents /
 // addFrame / finish calls, except the back-end (mapping + bundle adjustment), which runs in a thread of
-// its own when `threaded_backend` is on and is joined by finish() or the destructor.
+// its own when `threaded_backend` is on, and the event intake and event-frame building, in a thread of
+// their own when `stream.event_thread` is on; both are joined by finish() or the destructor.
 //
 // Buffering: see StreamConfig. Memory is bounded by the waits (frames waiting for events, event frames
-// waiting for frames) and by the events of one packet and its lookahead; the only thing that grows
+// waiting for frames), by the events of one packet and its lookahead, the producer's queue (about 1 M
+// events), and the event frames kept during the bootstrap (buffered_max_mb); the only thing that grows
 // with the run's length is the result itself (the poses, and the keyframes and points the window
 // retires).
 class Odometry {
