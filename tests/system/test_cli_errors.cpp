@@ -83,6 +83,7 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
               "the frame trackers' min_step must not be negative");
   expectError("run " + esim() + runOut() + " --set frame_cv_min_distance=-0.01",
               "frame_cv_min_distance and the frame trackers' min_step must not be negative");
+  expectError("run " + esim() + runOut() + " --set buffered_max_mb=0", "buffered_max_mb must be > 0");
   expectError("run " + esim() + runOut() + " --start 100", "no frame in the requested time range");
 }
 
