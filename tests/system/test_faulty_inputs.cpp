@@ -94,7 +94,8 @@ test::Measured cleanRun(double exposure_s) {
 
 // Within `ratio` times the clean run's ATE; with frame faults (the issue of frames the events must carry
 // through) also no rotation error above 1 degree, with event faults the rotation RMSE within 1.5x.
-void expectWithinCleanBounds(const eval::AteResult& a, test::Measured clean, bool max_rotation, double ratio) {
+void expectWithinCleanBounds(const eval::AteResult& a, test::Measured clean, bool max_rotation,
+                             double ratio) {
   EXPECT_LE(a.trans.rmse * 100, ratio * clean.ate_cm);
   if (max_rotation)
     EXPECT_LE(a.rot.max, 1.0);
