@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "core/camera.hpp"
+#include "core/se3.hpp"
 
 namespace eds {
 
@@ -31,6 +32,34 @@ inline Row6 egmRow(const CameraModel& pinhole, double u, double v, double gx, do
   const Vec3 ray = pinhole.pinholeRay(u, v);
   const Eigen::Matrix<double, 2, 6> J = featureSensitivity(ray.x(), ray.y(), 1.0 / inv_depth);
   return -(gx * pinhole.fx * J.row(0) + gy * pinhole.fy * J.row(1));
+}
+
+// The same row for the keyframe point seen from a camera at T_c_kf, with ν that camera's velocity
+// expressed in the keyframe's axes (the convention of the row above): the gradient is carried into the
+// camera's pixels through the warp's Jacobian (locally fronto-parallel in the keyframe, as the
+// tracker's constant inverse depth per pixel assumes), the flow is the camera's own, and ν is turned
+// into the camera's axes. At T_c_kf = identity it is egmRow; far from the keyframe the keyframe's own
+// flow field is no longer the camera's, and this keeps the prediction where the events are.
+inline Row6 egmRowAtView(const CameraModel& pinhole, double u, double v, double gx, double gy,
+                         double inv_depth, const SE3& T_c_kf) {
+  const Mat3 R = T_c_kf.rotationMatrix();
+  const Vec3 q = R * (pinhole.pinholeRay(u, v) / inv_depth) + T_c_kf.translation();
+  const double iz = 1.0 / q.z();
+  Eigen::Matrix<double, 2, 3> du_dq;
+  du_dq << pinhole.fx * iz, 0, -pinhole.fx * q.x() * iz * iz, 0, pinhole.fy * iz,
+      -pinhole.fy * q.y() * iz * iz;
+  Eigen::Matrix<double, 3, 2> dq_dukf;
+  dq_dukf.col(0) = R.col(0) / (pinhole.fx * inv_depth);
+  dq_dukf.col(1) = R.col(1) / (pinhole.fy * inv_depth);
+  const Eigen::Matrix2d M = du_dq * dq_dukf;  // ∂u_c / ∂u_kf
+  const Eigen::RowVector2d g = Eigen::RowVector2d(gx, gy) * M.inverse();
+  const Eigen::Matrix<double, 2, 6> J = featureSensitivity(q.x() * iz, q.y() * iz, q.z());
+  Row6 a = -(g.x() * pinhole.fx * J.row(0) + g.y() * pinhole.fy * J.row(1));
+  // ν_c = blockdiag(R, R) ν_kf.
+  Row6 out;
+  out.head<3>() = a.head<3>() * R;
+  out.tail<3>() = a.tail<3>() * R;
+  return out;
 }
 
 }  // namespace eds

@@ -28,11 +28,13 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
   p_kf_.clear();
   a_.clear();
   px_kf_.clear();
+  g_rho_.clear();
   for (const KeyframePoint& p : kf.points) {
     if (!(p.inv_depth > 0) || !std::isfinite(p.inv_depth)) continue;
     p_kf_.push_back(cam_.pinholeRay(p.u, p.v) * (1.0 / p.inv_depth));
     a_.push_back(egmRow(cam_, p.u, p.v, p.gx, p.gy, p.inv_depth));
     px_kf_.emplace_back(p.u, p.v);
+    g_rho_.emplace_back(p.gx, p.gy, p.inv_depth);
   }
   if (p_kf_.empty())
     throw std::invalid_argument("event tracker: keyframe " + std::to_string(kf.id) +
@@ -44,6 +46,17 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
   mh_.resize(n);
   D_.resize(n, 6);
   A_.resize(n, 6);
+}
+
+void EventTracker::linearizeAt(const SE3& T_ef_kf) {
+  const Mat3 R = T_ef_kf.rotationMatrix();
+  const Vec3 t = T_ef_kf.translation();
+  for (std::size_t i = 0; i < p_kf_.size(); ++i) {
+    // Behind or nearly in the camera's plane the warp degenerates; such a point is out of view anyway.
+    if ((R * p_kf_[i] + t).z() <= 1e-3) continue;
+    const Vec3& g = g_rho_[i];
+    a_[i] = egmRowAtView(cam_, px_kf_[i].x, px_kf_[i].y, g.x(), g.y(), g.z(), T_ef_kf);
+  }
 }
 
 int EventTracker::pointsInView(const SE3& T_ef_kf, int width, int height) const {
@@ -236,6 +249,7 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
                                 const PosePrior* prior) {
   TrackResult res;
   if (p_kf_.empty()) throw std::logic_error("EventTracker::track before setKeyframe");
+  if (cfg_.egm_at_view) linearizeAt(T_ef_kf);
   Eigen::VectorXd r;
   Eigen::MatrixXd J;
   int n = evaluate(ef.delta, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);

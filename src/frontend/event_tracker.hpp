@@ -34,11 +34,13 @@ struct EventTrackerConfig {
   int min_points = 30;           // fewer points in view: the frame cannot be tracked
   double min_correlation = 0.2;  // n̂·n below this after the solve: reported as a failure
   double lambda_initial = 1e-3;
+  // The EGM rows made at each event frame's starting pose (egmRowAtView) rather than at the keyframe.
+  bool egm_at_view = true;
   void validate() const;
 };
 
 EDS_FIELDS(EventTrackerConfig, max_iterations, levels, huber_initial, adapt_huber, border, set_margin,
-           min_points, min_correlation, lambda_initial)
+           min_points, min_correlation, lambda_initial, egm_at_view)
 
 // A Gaussian prior on the pose (a motion model's prediction). Its error is the left twist
 // e = log(T_ef_kf · T_prior⁻¹) = (translation, rotation), with standard deviations `sigma` in metres and
@@ -82,6 +84,10 @@ class EventTracker {
   TrackResult track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, int levels = 0,
                     const PosePrior* prior = nullptr);
 
+  // Remakes the EGM rows for a camera at T_ef_kf (egmRowAtView; track() does it at its start pose when
+  // egm_at_view is set); setKeyframe makes them at the keyframe.
+  void linearizeAt(const SE3& T_ef_kf);
+
   // Points of the keyframe that land inside the event frame at T_ef_kf.
   int pointsInView(const SE3& T_ef_kf, int width, int height) const;
 
@@ -99,8 +105,9 @@ class EventTracker {
  private:
   CameraModel cam_;
   EventTrackerConfig cfg_;
-  std::vector<Vec3> p_kf_;  // 3D points in the keyframe
-  std::vector<Row6> a_;     // EGM rows
+  std::vector<Vec3> p_kf_;   // 3D points in the keyframe
+  std::vector<Row6> a_;      // EGM rows
+  std::vector<Vec3> g_rho_;  // keyframe log gradient (gx, gy) and inverse depth, for linearizeAt
   std::vector<cv::Point2f> px_kf_;
   // One Levenberg-Marquardt solve on one (blurred) event frame; returns the points in view.
   int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior, Eigen::VectorXd& r,

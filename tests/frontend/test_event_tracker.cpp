@@ -380,6 +380,43 @@ TEST(EventTracker, EgmRowMatchesTheNumericPixelFlowInEveryColumn) {
   }
 }
 
+// The row for a camera away from the keyframe against numbers made without it: the current image is the
+// keyframe's (log intensity linear in the keyframe's pixels) seen through the plane z = Z of the
+// keyframe, its gradient taken by numeric differences through that warp, and the point's image velocity
+// in the current camera under each twist (given in the keyframe's axes, the rows' convention).
+TEST(EventTracker, EgmRowAtAViewIsTheCurrentGradientDottedWithTheCurrentFlow) {
+  CameraModel cam = pinhole240();
+  cam.fx = 210.0, cam.fy = 180.0, cam.cx = 121.0, cam.cy = 87.0;
+  const double u = 60.0, v = 120.0, Z = 1.7, gx = 0.4, gy = -0.9;
+  const SE3 T_c_kf(SO3::exp(Vec3(0.1, -0.25, 0.15)), Vec3(0.3, -0.1, 0.2));
+  const Row6 a = egmRowAtView(cam, u, v, gx, gy, 1.0 / Z, T_c_kf);
+  EXPECT_LT((egmRowAtView(cam, u, v, gx, gy, 1.0 / Z, SE3()) - egmRow(cam, u, v, gx, gy, 1.0 / Z)).norm(),
+            1e-9);
+
+  const Vec3 q = T_c_kf * Vec3((u - cam.cx) / cam.fx * Z, (v - cam.cy) / cam.fy * Z, Z);
+  const Vec2 uc = cam.project(q);
+  // Log intensity of the current image at pixel x: the keyframe's at the plane point that x sees.
+  const SE3 T_kf_c = T_c_kf.inverse();
+  const auto L = [&](const Vec2& x) {
+    const Vec3 d = T_kf_c.so3() * cam.pinholeRay(x.x(), x.y());
+    const Vec3& o = T_kf_c.translation();
+    const Vec3 X = o + (Z - o.z()) / d.z() * d;
+    return gx * (cam.fx * X.x() / X.z() + cam.cx) + gy * (cam.fy * X.y() / X.z() + cam.cy);
+  };
+  const double h = 1e-4, e = 1e-6;
+  const Vec2 g((L(uc + Vec2(h, 0)) - L(uc - Vec2(h, 0))) / (2 * h),
+               (L(uc + Vec2(0, h)) - L(uc - Vec2(0, h))) / (2 * h));
+  const Mat3 R = T_c_kf.rotationMatrix();
+  for (int k = 0; k < 6; ++k) {
+    const Vec6 nu_kf = Vec6::Unit(k);
+    const Vec3 vel = R * nu_kf.head<3>(), omega = R * nu_kf.tail<3>();
+    const Vec3 dq = -(vel + omega.cross(q));
+    const Vec2 flow = (cam.project(q + e * dq) - cam.project(q - e * dq)) / (2 * e);
+    const double expected = -g.dot(flow);
+    EXPECT_NEAR(a[k], expected, 1e-5 * (1 + std::abs(expected))) << "column " << k;
+  }
+}
+
 TEST(EventTracker, KeyframeWithoutDepthIsAClearError) {
   const CameraModel cam = pinhole240();
   EventTracker tracker(cam, {});
