@@ -37,7 +37,8 @@ void simulateThrough(const CameraModel& cam, const sim::Scene& scene, const sim:
   sc.events.seed = 3;
   sim::EcdWriter writer(out, false, true);
   sim::writeEcdCalib(out / "calib.txt", cam);
-  sim::writeGroundTruth(out / "groundtruth.txt", motion, motion.start(), motion.end(), sim::kGroundTruthRateHz);
+  sim::writeGroundTruth(out / "groundtruth.txt", motion, motion.start(), motion.end(),
+                        sim::kGroundTruthRateHz);
   sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), writer);
   writer.finish();
 }
@@ -130,14 +131,14 @@ TEST(DistortedLens, TrackingOnlyMatchesThePinholeCase) {
   EDS_REQUIRE_SHARED(calib, "ecd_slider_depth/calib.txt");
   const Pair& p = esimPair();
   expectClose("ESIM scene 3 s, tracking-only with true depth", trackOnly(p.pinhole), trackOnly(p.radtan),
-              {0.473, 0.270}, {0.515, 0.296});
+              {0.466, 0.266}, {0.517, 0.296});
 }
 
 TEST(DistortedLens, EventsAndFramesMatchThePinholeCase) {
   EDS_REQUIRE_SHARED(poster, "trajectories/ecd_poster_6dof_groundtruth.txt");
   EDS_REQUIRE_SHARED(calib, "ecd_slider_depth/calib.txt");
   const Pair& p = deskPair();
-  expectClose("desk 8 s, eds run", odometry(p.pinhole), odometry(p.radtan), {0.065, 0.057}, {0.083, 0.075});
+  expectClose("desk 8 s, eds run", odometry(p.pinhole), odometry(p.radtan), {0.065, 0.057}, {0.083, 0.081});
 }
 
 }  // namespace
