@@ -127,7 +127,7 @@ struct OdometryConfig {
   double buffered_max_mb = 128;
   // The refined event-rate positions (trajectory_events.txt): a local quadratic fit over ±this many
   // seconds (system/trajectory_smoothing.hpp; 0: as composed). The live poses are never smoothed.
-  double event_smoothing_s = 0.06;
+  double event_smoothing_s = 0.1;
   // The refined event-rate poses are then anchored to the successfully aligned frames' refined poses
   // (anchorToFrames) when the median interval between those frames is at most max_interval (at lower
   // frame rates the frame poses are no better than the events'), between frames at most max_gap apart.
