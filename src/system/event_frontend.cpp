@@ -70,12 +70,29 @@ EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg
 }
 
 void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
+  if (provisional_t_ >= 0 && ref.t < provisional_t_) return;  // older than the frame tracked against
   Keyframe kf = imageOf(ref, T_w_kf);
+  addFilledPoints(kf, ref.points);
+  adopt(std::move(kf), T_w_kf);
+}
+
+void EventFrontend::setProvisionalReference(TimeNs t, const cv::Mat& img, const SE3& T_w_f,
+                                            const std::vector<KeyframePoint>& points) {
+  Keyframe kf;
+  kf.id = -1;
+  kf.t = t;
+  kf.T_w_kf = T_w_f;
+  setKeyframeImage(kf, img);
+  addFilledPoints(kf, points);
+  adopt(std::move(kf), T_w_f, true);
+}
+
+void EventFrontend::addFilledPoints(Keyframe& kf, const std::vector<KeyframePoint>& points) const {
   // The back-end's points (their depth is optimized), and the keyframe's selected pixels that lie
   // next to one of them (fill radius): farther, a depth taken across an occlusion edge would bias
   // the tracker.
   std::vector<ProjectedPoint> proj;
-  for (const KeyframePoint& p : ref.points)
+  for (const KeyframePoint& p : points)
     if (p.inv_depth > 0) proj.push_back({p.u, p.v, p.inv_depth});
   const std::vector<cv::Point> px = selectPoints(kf.grad_x, kf.grad_y, cfg_.points);
   const std::vector<double> rho = fillInverseDepth(px, proj, cfg_.fill);
@@ -90,7 +107,6 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
     if (rho[i] > 0)
       uv.emplace_back(static_cast<float>(px[i].x), static_cast<float>(px[i].y)), depth.push_back(rho[i]);
   addPoints(kf, uv, depth, cfg_.depth_median_px);
-  adopt(std::move(kf), T_w_kf);
 }
 
 void EventFrontend::setDenseReference(const Keyframe& ref, const SE3& T_w_kf) {
@@ -103,7 +119,7 @@ void EventFrontend::setDenseReference(const Keyframe& ref, const SE3& T_w_kf) {
   adopt(std::move(kf), T_w_kf);
 }
 
-void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf) {
+void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   if (kf.points.size() < 50) return;  // keep the previous reference: this one cannot be tracked against
   std::vector<double> z;
   z.reserve(kf.points.size());
@@ -112,8 +128,13 @@ void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf) {
   median_depth_ = z[z.size() / 2];
   // The current estimate and the velocity, moved to the new keyframe.
   if (has_ref_) {
-    const SE3 T_w_ef = T_w_kf_ * T_ef_kf_.inverse();
-    const Mat3 R = (T_w_kf.inverse() * T_w_kf_).rotationMatrix();  // old keyframe -> new
+    // A keyframe made from a corrected frame comes back from the bundle adjustment in a moved world
+    // (a threaded back-end publishes it after later event frames): the estimate and the frames' poses
+    // follow that move, so that the keyframe is where its frame was tracked relative to them.
+    const std::optional<SE3> T_new_old = worldMoveTo(kf.t, T_w_kf);
+    const SE3 T_w_old = T_new_old ? *T_new_old * T_w_kf_ : T_w_kf_;  // the old reference, moved
+    const SE3 T_w_ef = T_w_old * T_ef_kf_.inverse();
+    const Mat3 R = (T_w_kf.inverse() * T_w_old).rotationMatrix();  // old keyframe -> new
     T_ef_kf_ = T_w_ef.inverse() * T_w_kf;
     nu_.head<3>() = R * nu_.head<3>();
     nu_.tail<3>() = R * nu_.tail<3>();
@@ -122,6 +143,11 @@ void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf) {
   }
   T_w_kf_ = T_w_kf;
   ref_id_ = kf.id;
+  provisional_t_ = provisional ? kf.t : -1;
+  if (!provisional) {
+    anchor_id_ = kf.id;
+    T_w_anchor_ = T_w_kf;
+  }
   ref_ = std::move(kf);
   tracker_.setKeyframe(ref_);
   t_prev_ = -1;
@@ -230,6 +256,24 @@ void EventFrontend::correct(TimeNs t, const SE3& T_w_c) {
   corrected_ = true;
   t_f0_ = t_f1_, T_w_f0_ = T_w_f1_;
   t_f1_ = t, T_w_f1_ = T_w_c;
+}
+
+std::optional<SE3> EventFrontend::worldMoveTo(TimeNs t_kf, const SE3& T_w_kf) {
+  // Exactly the frame's pose (a synchronous back-end returns the keyframe's optimized pose as the
+  // frame's): no move, and no rounding either.
+  const auto same = [&](const SE3& T) {
+    return T.translation() == T_w_kf.translation() && T.quaternion().coeffs() == T_w_kf.quaternion().coeffs();
+  };
+  SE3 T_new_old;
+  if (t_kf == t_f1_ && !same(T_w_f1_))
+    T_new_old = T_w_kf * T_w_f1_.inverse();
+  else if (t_kf == t_f0_ && t_kf != t_f1_ && !same(T_w_f0_))
+    T_new_old = T_w_kf * T_w_f0_.inverse();
+  else
+    return std::nullopt;
+  T_w_f0_ = T_new_old * T_w_f0_;
+  T_w_f1_ = T_new_old * T_w_f1_;
+  return T_new_old;
 }
 
 bool EventFrontend::motionPrior(TimeNs t, PosePrior& prior) const {

@@ -50,6 +50,19 @@ class FrameFrontend {
 
   BackendWorker& worker() { return worker_; }
 
+  // A keyframe handed to the threaded back-end and not yet published as the reference: the policy
+  // measures the motion from it (the reference's points seen from it), not from the reference, or
+  // the frame after every keyframe would ask for one more and wait for the back-end.
+  struct Pending {
+    bool active = false;
+    TimeNs t = -1;
+    SE3 T_w_kf;
+    double a = 0;
+    std::vector<KeyframePoint> points;
+  };
+  // That keyframe, or null when none is pending.
+  const Pending* pendingKeyframe() const { return pending_.active ? &pending_ : nullptr; }
+
  private:
   bool keyframeDueBeforeNextFrame(const SE3& T_f_kf) const;
   bool wantKeyframe(const Flow& fl, double alpha) const;
@@ -70,16 +83,8 @@ class FrameFrontend {
   double last_rmse_ = 1e9;          // of the last successful alignment
   SE3 last_T_w_f_, prev_T_w_f_;
   bool has_last_ = false, has_prev_ = false;
-  // A keyframe handed to the threaded back-end and not yet published as the reference: the policy
-  // measures the motion from it (the reference's points seen from it), not from the reference, or
-  // the frame after every keyframe would ask for one more and wait for the back-end.
-  struct Pending {
-    bool active = false;
-    SE3 T_w_kf;
-    double a = 0;
-    std::vector<KeyframePoint> points;
-  } pending_;
-  void setPending(const SE3& T_w_new, double a);
+  Pending pending_;
+  void setPending(TimeNs t, const SE3& T_w_new, double a);
 };
 
 }  // namespace eds

@@ -1,0 +1,82 @@
+// The event front-end's reference hand-over: a frame that became a keyframe is tracked against at once
+// (provisional reference) while a threaded back-end maps it, and the keyframe the back-end publishes
+// later, in a world its optimization moved, takes over without moving the estimate relative to it.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "sim_frames.hpp"
+#include "system/event_frontend.hpp"
+
+namespace eds {
+namespace {
+
+// A textured keyframe at time t (intensity in [0.2, 0.8]) with points on a 3 px grid at inverse depth 0.5.
+Keyframe texturedKeyframe(int id, TimeNs t, const SE3& T_w_kf) {
+  cv::Mat noise(180, 240, CV_32F);
+  cv::RNG rng(static_cast<std::uint64_t>(id) + 1);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+  cv::normalize(noise, noise, 0.2, 0.8, cv::NORM_MINMAX);
+  Keyframe kf;
+  kf.id = id, kf.t = t, kf.T_w_kf = T_w_kf, kf.image = noise;
+  for (int v = 6; v < 174; v += 3)
+    for (int u = 6; u < 234; u += 3) {
+      KeyframePoint p;
+      p.u = static_cast<float>(u), p.v = static_cast<float>(v), p.inv_depth = 0.5;
+      kf.points.push_back(p);
+    }
+  return kf;
+}
+
+double distance(const SE3& a, const SE3& b) { return (a.inverse() * b).log().norm(); }
+
+TEST(EventFrontend, ProvisionalReferenceThenThePublishedKeyframeInAMovedWorld) {
+  EventFrontend front(test::simCamera(), EventFrontendConfig{});
+  const SE3 T_w_kf0 = SE3::exp((Vec6() << 0.1, 0, 0, 0, 0.02, 0).finished());
+  front.setReference(texturedKeyframe(3, fromSeconds(1.0), T_w_kf0), T_w_kf0);
+  ASSERT_TRUE(front.hasReference());
+  // A frame at 1.2 s, tracked 5 cm and 2 degrees from the keyframe, becomes a keyframe.
+  const TimeNs t1 = fromSeconds(1.2);
+  const SE3 T_w_f1 = T_w_kf0 * SE3::exp((Vec6() << 0.05, 0.01, 0, 0.035, 0, 0).finished());
+  front.correct(t1, T_w_f1);
+  const Keyframe f1 = texturedKeyframe(4, t1, T_w_f1);
+  front.setProvisionalReference(t1, f1.image, T_w_f1, f1.points);
+  // Tracked against the frame, composed with the published keyframe.
+  EXPECT_LT(front.T_ef_kf().log().norm(), 1e-12);
+  EXPECT_EQ(front.referenceId(), 3);
+  EXPECT_LT(distance(front.T_w_kf(), T_w_kf0), 1e-12);
+  EXPECT_EQ(front.reference().t, t1);
+  // The camera moves on relative to the frame; an older keyframe published meanwhile is not taken.
+  const SE3 T_f1_ef = SE3::exp((Vec6() << 0.01, 0, 0.005, 0, 0.01, 0).finished());
+  front.restartFrom(T_w_f1 * T_f1_ef);
+  front.setReference(texturedKeyframe(2, fromSeconds(0.8), T_w_kf0), T_w_kf0);
+  EXPECT_EQ(front.reference().t, t1);
+  EXPECT_EQ(front.referenceId(), 3);
+  // The frame's keyframe comes back from the bundle adjustment 3 cm and 1 degree away (the world
+  // estimate moved): the estimate keeps its pose relative to it.
+  const SE3 T_w_kf1 = SE3::exp((Vec6() << 0.03, -0.01, 0.02, 0, 0, 0.017).finished()) * T_w_f1;
+  front.setReference(texturedKeyframe(4, t1, T_w_kf1), T_w_kf1);
+  EXPECT_EQ(front.referenceId(), 4);
+  EXPECT_LT(distance(front.T_w_kf(), T_w_kf1), 1e-12);
+  EXPECT_LT(distance(front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
+}
+
+// A keyframe published in the world the frames were tracked in (a synchronous back-end returns the
+// keyframe's pose as the frame's) moves nothing.
+TEST(EventFrontend, KeyframeAtTheCorrectedFramesPoseKeepsTheEstimate) {
+  EventFrontend front(test::simCamera(), EventFrontendConfig{});
+  const SE3 T_w_kf0;
+  front.setReference(texturedKeyframe(0, 0, T_w_kf0), T_w_kf0);
+  const TimeNs t1 = fromSeconds(0.05);
+  const SE3 T_w_f1 = SE3::exp((Vec6() << 0.02, 0, 0.01, 0, 0.01, 0).finished());
+  front.correct(t1, T_w_f1);
+  const SE3 T_f1_ef = SE3::exp((Vec6() << 0.004, 0, 0, 0, 0, 0.002).finished());
+  front.restartFrom(T_w_f1 * T_f1_ef);
+  front.setReference(texturedKeyframe(1, t1, T_w_f1), T_w_f1);
+  EXPECT_EQ(front.referenceId(), 1);
+  EXPECT_LT(distance(front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
+}
+
+}  // namespace
+}  // namespace eds
