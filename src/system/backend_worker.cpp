@@ -18,6 +18,7 @@ BackendWorker::BackendWorker(const CameraModel& pinhole, const MappingConfig& ma
       mcfg_(mapping),
       window_(pinhole, backend),
       next_id_(first_id),
+      submitted_id_(first_id),
       threaded_(threaded),
       caller_clock_(caller_clock) {
   mcfg_.points.validate();
@@ -34,16 +35,18 @@ BackendWorker::~BackendWorker() {
   thread_.join();
 }
 
-void BackendWorker::submit(KeyframeJob job) {
+int BackendWorker::submit(KeyframeJob job) {
+  const int id = submitted_id_++;
   if (!threaded_) {
     process(job);
-    return;
+    return id;
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     queue_.push_back(std::move(job));
   }
   cv_.notify_all();
+  return id;
 }
 
 int BackendWorker::nextId() const { return next_id_; }

@@ -64,8 +64,9 @@ class BackendWorker {
   BackendWorker(const BackendWorker&) = delete;
   BackendWorker& operator=(const BackendWorker&) = delete;
 
-  // Queues a keyframe (threaded) or processes it at once.
-  void submit(KeyframeJob job);
+  // Queues a keyframe (threaded) or processes it at once; returns the id it gets (ids are given in
+  // the order of submission).
+  int submit(KeyframeJob job);
   bool busy() const;
   // The id the next keyframe submitted will get (read while no keyframe is queued or in work).
   int nextId() const;
@@ -94,7 +95,8 @@ class BackendWorker {
   MappingConfig mcfg_;
   SlidingWindow window_;
   BackendTimings timings_;
-  int next_id_ = 0;
+  int next_id_ = 0;       // the worker's
+  int submitted_id_ = 0;  // the caller's
 
   bool threaded_;
   StageClock* caller_clock_;

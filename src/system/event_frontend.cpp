@@ -76,10 +76,10 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
   adopt(std::move(kf), T_w_kf);
 }
 
-void EventFrontend::setProvisionalReference(TimeNs t, const cv::Mat& img, const SE3& T_w_f,
+void EventFrontend::setProvisionalReference(int id, TimeNs t, const cv::Mat& img, const SE3& T_w_f,
                                             const std::vector<KeyframePoint>& points) {
   Keyframe kf;
-  kf.id = -1;
+  kf.id = id;
   kf.t = t;
   kf.T_w_kf = T_w_f;
   setKeyframeImage(kf, img);
@@ -130,8 +130,11 @@ void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   if (has_ref_) {
     // A keyframe made from a corrected frame comes back from the bundle adjustment in a moved world
     // (a threaded back-end publishes it after later event frames): the estimate and the frames' poses
-    // follow that move, so that the keyframe is where its frame was tracked relative to them.
-    const std::optional<SE3> T_new_old = worldMoveTo(kf.t, T_w_kf);
+    // follow that move, so that the keyframe is where its frame was tracked relative to them. The
+    // provisional reference's move is known whatever frames came since: its own pose's.
+    const std::optional<SE3> T_new_old = provisional_t_ >= 0 && kf.t == provisional_t_
+                                             ? moveWorld(T_w_kf * T_w_kf_.inverse())
+                                             : worldMoveTo(kf.t, T_w_kf);
     const SE3 T_w_old = T_new_old ? *T_new_old * T_w_kf_ : T_w_kf_;  // the old reference, moved
     const SE3 T_w_ef = T_w_old * T_ef_kf_.inverse();
     const Mat3 R = (T_w_kf.inverse() * T_w_old).rotationMatrix();  // old keyframe -> new
@@ -144,10 +147,6 @@ void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   T_w_kf_ = T_w_kf;
   ref_id_ = kf.id;
   provisional_t_ = provisional ? kf.t : -1;
-  if (!provisional) {
-    anchor_id_ = kf.id;
-    T_w_anchor_ = T_w_kf;
-  }
   ref_ = std::move(kf);
   tracker_.setKeyframe(ref_);
   t_prev_ = -1;
@@ -271,6 +270,10 @@ std::optional<SE3> EventFrontend::worldMoveTo(TimeNs t_kf, const SE3& T_w_kf) {
     T_new_old = T_w_kf * T_w_f0_.inverse();
   else
     return std::nullopt;
+  return moveWorld(T_new_old);
+}
+
+SE3 EventFrontend::moveWorld(const SE3& T_new_old) {
   T_w_f0_ = T_new_old * T_w_f0_;
   T_w_f1_ = T_new_old * T_w_f1_;
   return T_new_old;

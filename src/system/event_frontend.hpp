@@ -70,15 +70,15 @@ class EventFrontend {
   // A frame at time t that became a keyframe the threaded back-end is still mapping: tracked against
   // at once (image `img`, pose T_w_f as tracked, `points` the reference's points seen from it), until
   // the back-end publishes that keyframe. A reference older than t is not taken meanwhile.
-  void setProvisionalReference(TimeNs t, const cv::Mat& img, const SE3& T_w_f,
+  void setProvisionalReference(int id, TimeNs t, const cv::Mat& img, const SE3& T_w_f,
                                const std::vector<KeyframePoint>& points);
   bool hasReference() const { return has_ref_; }
   // The reference as tracked: its image, and its points with their (filtered) inverse depths.
   const Keyframe& reference() const { return ref_; }
   // The keyframe the event poses are composed with (T_w_ef = T_w_kf·T_kf_ef) and its pose: the
-  // reference, or under a provisional one the last reference the back-end published.
-  int referenceId() const { return anchor_id_; }
-  const SE3& T_w_kf() const { return T_w_anchor_; }
+  // reference, a provisional one included (its id is the one the back-end will publish it with).
+  int referenceId() const { return ref_id_; }
+  const SE3& T_w_kf() const { return T_w_kf_; }
   // Tracks an event frame from the prior (if given) or a constant-velocity prediction. The pose
   // (T_w_ef), or nullopt when the frame cannot be tracked (the estimate then stays as it was) or the
   // lost-track check fails (the estimate follows the solve; `failure` says why).
@@ -118,8 +118,8 @@ class EventFrontend {
   EventTracker tracker_;
   bool has_ref_ = false;
   Keyframe ref_;
-  int ref_id_ = -1, anchor_id_ = -1;
-  SE3 T_w_kf_, T_w_anchor_;
+  int ref_id_ = -1;
+  SE3 T_w_kf_;
   TimeNs provisional_t_ = -1;  // time of the provisional reference's frame; -1: none
   SE3 T_ef_kf_, T_prev_;       // current estimate and the one before (constant-velocity prediction)
   Vec6 nu_ = Vec6::Zero();
@@ -142,6 +142,7 @@ class EventFrontend {
   // T_w_kf, applied to the last two frames' poses; nullopt when neither is at t_kf or it is exactly
   // there.
   std::optional<SE3> worldMoveTo(TimeNs t_kf, const SE3& T_w_kf);
+  SE3 moveWorld(const SE3& T_new_old);  // moves the frames' poses; returns the move
   std::string lostTrack(const TrackResult& tr) const;
   bool motionPrior(TimeNs t, PosePrior& prior) const;
   Vec6 priorSigma(double dt, double grow) const;

@@ -65,9 +65,9 @@ FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, 
 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
                                std::vector<KeyframePoint> pts_with_depth) {
-  worker_.submit({t, img, T_w_new, a, b, std::move(pts_with_depth)});
+  const int id = worker_.submit({t, img, T_w_new, a, b, std::move(pts_with_depth)});
   if (cfg_.threaded_backend) {
-    setPending(t, T_w_new, a);
+    setPending(id, t, T_w_new, a);
     return T_w_new;
   }
   adoptReference(false);
@@ -179,8 +179,9 @@ bool FrameFrontend::adoptReference(bool wait) {
   return true;
 }
 
-void FrameFrontend::setPending(TimeNs t, const SE3& T_w_new, double a) {
+void FrameFrontend::setPending(int id, TimeNs t, const SE3& T_w_new, double a) {
   pending_.active = true;
+  pending_.id = id;
   pending_.t = t;
   pending_.T_w_kf = T_w_new;
   pending_.a = a;

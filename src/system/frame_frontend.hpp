@@ -55,6 +55,7 @@ class FrameFrontend {
   // the frame after every keyframe would ask for one more and wait for the back-end.
   struct Pending {
     bool active = false;
+    int id = -1;  // the id the back-end will publish it with
     TimeNs t = -1;
     SE3 T_w_kf;
     double a = 0;
@@ -84,7 +85,7 @@ class FrameFrontend {
   SE3 last_T_w_f_, prev_T_w_f_;
   bool has_last_ = false, has_prev_ = false;
   Pending pending_;
-  void setPending(TimeNs t, const SE3& T_w_new, double a);
+  void setPending(int id, TimeNs t, const SE3& T_w_new, double a);
 };
 
 }  // namespace eds

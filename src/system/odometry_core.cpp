@@ -99,7 +99,8 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
     // A keyframe the threaded back-end is still mapping: the events track against its frame at once,
     // not against the reference it replaces for the time the mapping takes.
     const FrameFrontend::Pending* kf = odo_->pendingKeyframe();
-    if (cfg_.use_events && kf && kf->t == t) events_->setProvisionalReference(t, img, kf->T_w_kf, kf->points);
+    if (cfg_.use_events && kf && kf->t == t)
+      events_->setProvisionalReference(kf->id, t, img, kf->T_w_kf, kf->points);
     last_good_t_ = t;
     failed_in_row_ = 0;
     inputs_without_pose_ = 0;

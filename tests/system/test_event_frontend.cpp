@@ -41,18 +41,18 @@ TEST(EventFrontend, ProvisionalReferenceThenThePublishedKeyframeInAMovedWorld) {
   const SE3 T_w_f1 = T_w_kf0 * SE3::exp((Vec6() << 0.05, 0.01, 0, 0.035, 0, 0).finished());
   front.correct(t1, T_w_f1);
   const Keyframe f1 = texturedKeyframe(4, t1, T_w_f1);
-  front.setProvisionalReference(t1, f1.image, T_w_f1, f1.points);
-  // Tracked against the frame, composed with the published keyframe.
+  front.setProvisionalReference(4, t1, f1.image, T_w_f1, f1.points);
+  // Tracked against the frame, composed with it under the id the back-end will give it.
   EXPECT_LT(front.T_ef_kf().log().norm(), 1e-12);
-  EXPECT_EQ(front.referenceId(), 3);
-  EXPECT_LT(distance(front.T_w_kf(), T_w_kf0), 1e-12);
+  EXPECT_EQ(front.referenceId(), 4);
+  EXPECT_LT(distance(front.T_w_kf(), T_w_f1), 1e-12);
   EXPECT_EQ(front.reference().t, t1);
   // The camera moves on relative to the frame; an older keyframe published meanwhile is not taken.
   const SE3 T_f1_ef = SE3::exp((Vec6() << 0.01, 0, 0.005, 0, 0.01, 0).finished());
   front.restartFrom(T_w_f1 * T_f1_ef);
   front.setReference(texturedKeyframe(2, fromSeconds(0.8), T_w_kf0), T_w_kf0);
   EXPECT_EQ(front.reference().t, t1);
-  EXPECT_EQ(front.referenceId(), 3);
+  EXPECT_EQ(front.referenceId(), 4);
   // The frame's keyframe comes back from the bundle adjustment 3 cm and 1 degree away (the world
   // estimate moved): the estimate keeps its pose relative to it.
   const SE3 T_w_kf1 = SE3::exp((Vec6() << 0.03, -0.01, 0.02, 0, 0, 0.017).finished()) * T_w_f1;
@@ -62,20 +62,44 @@ TEST(EventFrontend, ProvisionalReferenceThenThePublishedKeyframeInAMovedWorld) {
   EXPECT_LT(distance(front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
 }
 
+// A front-end on a keyframe at the origin, corrected by a frame at 50 ms.
+struct CorrectedOnce {
+  EventFrontend front{test::simCamera(), EventFrontendConfig{}};
+  const TimeNs t1 = fromSeconds(0.05);
+  const SE3 T_w_f1 = SE3::exp((Vec6() << 0.02, 0, 0.01, 0, 0.01, 0).finished());
+  CorrectedOnce() {
+    front.setReference(texturedKeyframe(0, 0, SE3()), SE3());
+    front.correct(t1, T_w_f1);
+  }
+};
+
+// Published after later frames corrected the estimate (the frames do not wait for the back-end): the
+// estimate still keeps its pose relative to the keyframe it was tracked against.
+TEST(EventFrontend, ProvisionalReferencePublishedAfterLaterFrames) {
+  CorrectedOnce s;
+  const Keyframe f1 = texturedKeyframe(1, s.t1, s.T_w_f1);
+  s.front.setProvisionalReference(1, s.t1, f1.image, s.T_w_f1, f1.points);
+  for (int k = 2; k <= 3; ++k)
+    s.front.correct(fromSeconds(0.05 * k),
+                    s.T_w_f1 * SE3::exp((Vec6() << 0.01 * k, 0, 0, 0, 0, 0).finished()));
+  const SE3 T_f1_ef = SE3::exp((Vec6() << 0.035, 0, 0.002, 0, 0.004, 0).finished());
+  s.front.restartFrom(s.T_w_f1 * T_f1_ef);
+  const SE3 T_w_kf1 = SE3::exp((Vec6() << -0.02, 0.01, 0.03, 0.01, 0, 0).finished()) * s.T_w_f1;
+  s.front.setReference(texturedKeyframe(1, s.t1, T_w_kf1), T_w_kf1);
+  EXPECT_EQ(s.front.referenceId(), 1);
+  EXPECT_LT(distance(s.front.T_w_kf(), T_w_kf1), 1e-12);
+  EXPECT_LT(distance(s.front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
+}
+
 // A keyframe published in the world the frames were tracked in (a synchronous back-end returns the
 // keyframe's pose as the frame's) moves nothing.
 TEST(EventFrontend, KeyframeAtTheCorrectedFramesPoseKeepsTheEstimate) {
-  EventFrontend front(test::simCamera(), EventFrontendConfig{});
-  const SE3 T_w_kf0;
-  front.setReference(texturedKeyframe(0, 0, T_w_kf0), T_w_kf0);
-  const TimeNs t1 = fromSeconds(0.05);
-  const SE3 T_w_f1 = SE3::exp((Vec6() << 0.02, 0, 0.01, 0, 0.01, 0).finished());
-  front.correct(t1, T_w_f1);
+  CorrectedOnce s;
   const SE3 T_f1_ef = SE3::exp((Vec6() << 0.004, 0, 0, 0, 0, 0.002).finished());
-  front.restartFrom(T_w_f1 * T_f1_ef);
-  front.setReference(texturedKeyframe(1, t1, T_w_f1), T_w_f1);
-  EXPECT_EQ(front.referenceId(), 1);
-  EXPECT_LT(distance(front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
+  s.front.restartFrom(s.T_w_f1 * T_f1_ef);
+  s.front.setReference(texturedKeyframe(1, s.t1, s.T_w_f1), s.T_w_f1);
+  EXPECT_EQ(s.front.referenceId(), 1);
+  EXPECT_LT(distance(s.front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
 }
 
 }  // namespace
