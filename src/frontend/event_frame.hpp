@@ -71,6 +71,7 @@ class EventFrameBuilder {
 
  private:
   void vote(const cv::Point2f& u, float v);
+  void prefetchCells(const cv::Point2f& u) const;  // the accumulator cells vote(u) adds to
   // Restarts the turn bookkeeping at stream index `from` (a new stream, or a window that moved past
   // events it had not seen).
   void resetTurns(std::uint64_t from);

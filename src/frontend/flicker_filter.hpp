@@ -43,6 +43,13 @@ class FlickerFilter {
     return kept;
   }
   std::size_t dropped() const { return dropped_; }
+  // Fetches the state of the pixel of an event to come into the cache: events hit pixels out of
+  // memory order, and at large sensor sizes the states do not fit the cache.
+  void prefetch(int x, int y) const {
+    const std::size_t i =
+        static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x);
+    if (cfg_.enabled && i < pixels_.size()) __builtin_prefetch(pixels_.data() + i, 1);
+  }
 
  private:
   FlickerFilterConfig cfg_;

@@ -11,8 +11,8 @@ void PointSelectionConfig::validate() const {
   if (tile < 1) throw std::invalid_argument("point selection: tile must be >= 1");
   if (!(fraction > 0 && fraction <= 1))
     throw std::invalid_argument("point selection: fraction must be in (0, 1]");
-  if (border < 0 || max_points < 0)
-    throw std::invalid_argument("point selection: negative border or max_points");
+  if (border < 0 || max_points < 0 || !(full_density_pixels >= 0))
+    throw std::invalid_argument("point selection: negative border, max_points or full_density_pixels");
 }
 
 std::vector<cv::Point> selectPoints(const cv::Mat& gx, const cv::Mat& gy, const PointSelectionConfig& cfg) {
@@ -24,10 +24,17 @@ std::vector<cv::Point> selectPoints(const cv::Mat& gx, const cv::Mat& gy, const 
   };
   std::vector<Cand> tile_c, chosen;
   const float min2 = static_cast<float>(cfg.min_gradient * cfg.min_gradient);
-  for (int ty = cfg.border; ty < H - cfg.border; ty += cfg.tile) {
-    for (int tx = cfg.border; tx < W - cfg.border; tx += cfg.tile) {
+  int tile = cfg.tile;
+  double fraction = cfg.fraction;
+  const double pixels = static_cast<double>(W) * H;
+  if (cfg.full_density_pixels > 0 && pixels > cfg.full_density_pixels) {
+    tile = static_cast<int>(std::lround(cfg.tile * std::sqrt(pixels / cfg.full_density_pixels)));
+    fraction = std::min(1.0, cfg.fraction * cfg.tile * cfg.tile / (static_cast<double>(tile) * tile));
+  }
+  for (int ty = cfg.border; ty < H - cfg.border; ty += tile) {
+    for (int tx = cfg.border; tx < W - cfg.border; tx += tile) {
       tile_c.clear();
-      const int y1 = std::min(ty + cfg.tile, H - cfg.border), x1 = std::min(tx + cfg.tile, W - cfg.border);
+      const int y1 = std::min(ty + tile, H - cfg.border), x1 = std::min(tx + tile, W - cfg.border);
       for (int y = ty; y < y1; ++y) {
         const float* rx = gx.ptr<float>(y);
         const float* ry = gy.ptr<float>(y);
@@ -37,7 +44,7 @@ std::vector<cv::Point> selectPoints(const cv::Mat& gx, const cv::Mat& gy, const 
         }
       }
       const auto keep = std::min<std::size_t>(
-          tile_c.size(), static_cast<std::size_t>(std::ceil(cfg.fraction * (y1 - ty) * (x1 - tx))));
+          tile_c.size(), static_cast<std::size_t>(std::ceil(fraction * (y1 - ty) * (x1 - tx))));
       std::partial_sort(tile_c.begin(), tile_c.begin() + keep, tile_c.end(),
                         [](const Cand& a, const Cand& b) { return a.mag2 > b.mag2; });
       chosen.insert(chosen.end(), tile_c.begin(), tile_c.begin() + keep);

@@ -4,6 +4,7 @@
 // strongest edge. The same points feed the event tracker and (a subset) the back-end.
 #include <opencv2/core.hpp>
 #include <vector>
+
 #include "core/reflect.hpp"
 
 namespace eds {
@@ -14,10 +15,13 @@ struct PointSelectionConfig {
   double min_gradient = 0.02;  // |∇ log I| per pixel below this is never selected (flat areas)
   int border = 4;              // pixels this close to the image border are skipped
   int max_points = 0;          // 0 = no cap; else the strongest over the whole image
-  void validate() const;       // throws std::invalid_argument
+  // 0 = off; else an image with more pixels than this gets the count of points of one this size:
+  // tiles √(pixels / this) times larger, keeping as many points each (spread as before).
+  double full_density_pixels = 0;
+  void validate() const;  // throws std::invalid_argument
 };
 
-EDS_FIELDS(PointSelectionConfig, tile, fraction, min_gradient, border, max_points)
+EDS_FIELDS(PointSelectionConfig, tile, fraction, min_gradient, border, max_points, full_density_pixels)
 
 // Returns selected pixel coordinates (x, y), sorted by row then column.
 std::vector<cv::Point> selectPoints(const cv::Mat& grad_x, const cv::Mat& grad_y,

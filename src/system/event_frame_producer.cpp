@@ -83,7 +83,9 @@ void EventFrameProducer::append(const EventArray& ev, std::size_t a, std::size_t
   // Sized for all, then cut to those kept: no capacity check per event.
   std::size_t n = buf_.size();
   buf_.resize(n + (b - a));
+  constexpr std::size_t kAhead = 16;  // events whose pixel state is fetched ahead
   for (std::size_t i = a; i < b; ++i) {
+    if (i + kAhead < b) flicker_.prefetch(ev.x[i + kAhead], ev.y[i + kAhead]);
     if (!flicker_.keep(ev.t[i], ev.x[i], ev.y[i], ev.p[i])) continue;
     buf_.t[n] = ev.t[i], buf_.x[n] = ev.x[i], buf_.y[n] = ev.y[i], buf_.p[n] = ev.p[i];
     ++n;

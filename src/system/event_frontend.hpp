@@ -49,7 +49,10 @@ EDS_FIELDS(LostTrackConfig, min_correlation_ratio, max_cost_ratio)
 
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
-  PointSelectionConfig points;  // selection on the keyframe's log gradient
+  // Selection on the keyframe's log gradient. Beyond a DAVIS346's pixel count the tracker keeps the
+  // point count of that size (spread the same way): its work per event frame stops growing with the
+  // sensor, at no measured cost in accuracy at 640x480.
+  PointSelectionConfig points{.full_density_pixels = 1e5};
   DepthFillConfig fill{.max_distance_px = 1, .neighbours = 3};
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
   MotionPriorConfig motion_prior;

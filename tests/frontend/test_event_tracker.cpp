@@ -425,28 +425,56 @@ TEST(EventTracker, KeyframeWithoutDepthIsAClearError) {
   EXPECT_THROW(tracker.setKeyframe(kf), std::invalid_argument);
 }
 
-TEST(PointSelection, SpreadsOverTilesAndHonoursFraction) {
-  const cv::Mat img = smoothRandomImage(240, 180, 5, 1.5);
-  cv::Mat gx, gy;
+// Sobel gradients of a smooth random image (seed), per pixel, as the keyframes have them.
+void randomGradients(int w, int h, unsigned seed, cv::Mat& gx, cv::Mat& gy) {
+  const cv::Mat img = smoothRandomImage(w, h, seed, 1.5);
   cv::Sobel(img, gx, CV_32F, 1, 0, 3, 1.0 / 8);
   cv::Sobel(img, gy, CV_32F, 0, 1, 3, 1.0 / 8);
+}
+
+// How many size x size blocks from (4, 4) up to (w - 4, h - 4) hold none of the points.
+int emptyBlocks(const std::vector<cv::Point>& pts, int w, int h, int size) {
+  int empty = 0;
+  for (int by = 4; by + size <= h - 4; by += size)
+    for (int bx = 4; bx + size <= w - 4; bx += size) {
+      int c = 0;
+      for (const auto& p : pts) c += p.x >= bx && p.x < bx + size && p.y >= by && p.y < by + size;
+      empty += c == 0;
+    }
+  return empty;
+}
+
+TEST(PointSelection, SpreadsOverTilesAndHonoursFraction) {
+  cv::Mat gx, gy;
+  randomGradients(240, 180, 5, gx, gy);
   PointSelectionConfig cfg;
   cfg.min_gradient = 0;
   cfg.fraction = 0.1;
   const auto pts = selectPoints(gx, gy, cfg);
   const double usable = (240 - 8) * (180 - 8);
   EXPECT_NEAR(pts.size() / usable, 0.1, 0.02);
-  // Every 11x11 tile has its share: no tile left empty.
-  int empty_tiles = 0;
-  for (int ty = 4; ty + 11 <= 176; ty += 11)
-    for (int tx = 4; tx + 11 <= 236; tx += 11) {
-      int c = 0;
-      for (const auto& p : pts) c += p.x >= tx && p.x < tx + 11 && p.y >= ty && p.y < ty + 11;
-      empty_tiles += c == 0;
-    }
-  EXPECT_EQ(empty_tiles, 0);
+  EXPECT_EQ(emptyBlocks(pts, 240, 180, 11), 0);  // every 11x11 tile has its share
   cfg.max_points = 500;
   EXPECT_EQ(selectPoints(gx, gy, cfg).size(), 500u);
+}
+
+// Beyond full_density_pixels an image keeps the point count of an image that size, still spread: at
+// 640x480 with a 240x180 density, about 240*180*fraction points and none of its 32x32 blocks empty.
+TEST(PointSelection, LargeImagesKeepTheCountOfTheFullDensitySize) {
+  cv::Mat gx, gy;
+  randomGradients(640, 480, 7, gx, gy);
+  PointSelectionConfig cfg;
+  cfg.min_gradient = 0;
+  cfg.fraction = 0.1;
+  const std::size_t full = selectPoints(gx, gy, cfg).size();
+  cfg.full_density_pixels = 240 * 180;
+  const auto pts = selectPoints(gx, gy, cfg);
+  EXPECT_NEAR(static_cast<double>(pts.size()), 0.1 * 240 * 180, 0.1 * 0.1 * 240 * 180);
+  EXPECT_GT(full, 6 * pts.size());
+  EXPECT_EQ(emptyBlocks(pts, 640, 480, 32), 0);
+  // Images up to that size are selected as before.
+  cfg.full_density_pixels = 640 * 480;
+  EXPECT_EQ(selectPoints(gx, gy, cfg).size(), full);
 }
 
 }  // namespace
