@@ -102,5 +102,17 @@ TEST(EventFrontend, KeyframeAtTheCorrectedFramesPoseKeepsTheEstimate) {
   EXPECT_LT(distance(s.front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
 }
 
+// Without a provisional reference (one with too few points is refused), a keyframe made from the last
+// corrected frame that comes back in a moved world still keeps the estimate's pose relative to it.
+TEST(EventFrontend, CorrectedFramesKeyframeInAMovedWorldWithoutProvisionalReference) {
+  CorrectedOnce s;
+  const SE3 T_f1_ef = SE3::exp((Vec6() << 0.01, 0.004, 0, 0, 0.003, 0).finished());
+  s.front.restartFrom(s.T_w_f1 * T_f1_ef);
+  const SE3 T_w_kf1 = SE3::exp((Vec6() << 0.02, -0.01, 0.01, 0, 0.01, 0).finished()) * s.T_w_f1;
+  s.front.setReference(texturedKeyframe(1, s.t1, T_w_kf1), T_w_kf1);
+  EXPECT_EQ(s.front.referenceId(), 1);
+  EXPECT_LT(distance(s.front.T_ef_kf(), T_f1_ef.inverse()), 1e-9);
+}
+
 }  // namespace
 }  // namespace eds
