@@ -14,7 +14,7 @@ void BootstrapConfig::validate() const {
   points.validate();
   if (!(min_parallax_px > 0) || !(min_parallax_px_sparse > 0) || !(sparse_frame_interval_s > 0) ||
       min_points < 1 || min_frames < 1 || max_frames <= min_frames || !(max_rmse > 0) ||
-      depth_prior_weight < 0)
+      depth_prior_weight < 0 || final_views < 2)
     throw std::invalid_argument("bootstrap: bad configuration");
 }
 
@@ -211,6 +211,10 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
   const bool sparse = t - frames_[frames_.size() - 2].t >= fromSeconds(cfg_.sparse_frame_interval_s);
   const double min_parallax = sparse ? cfg_.min_parallax_px_sparse : cfg_.min_parallax_px;
   if (n_after < cfg_.min_frames || parallax_ < min_parallax || geo_state_ == GeoState::kPending) return false;
+  // Each frame in between was fitted with the depths of its time, which moved on since (from 1 at the
+  // start): aligned again to the final map, in its scale.
+  realignFrames(t, frames_.back().T_ref_c, 1.0, frames_.size() - 1);
+  refineWithViews(image);
   normalizeScale();
   done_ = true;
   return true;
@@ -240,7 +244,89 @@ void Bootstrap::normalizeScale() {
   const double m = sum / n;
   for (KeyframePoint& p : ref_.points) p.inv_depth /= m;
   for (BootstrapFrame& f : frames_) f.T_ref_c.translation() *= m;
-  images_.clear();
+  images_ = {};
+}
+
+void Bootstrap::realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count) {
+  // Starting points: the previous frame's result moved by the relative motion the frames had before
+  // (translation times `scale`), and the geodesic between the reference and the last frame; the
+  // better fit wins.
+  FrameTracker tracker(cam_, cfg_.tracker);
+  tracker.setKeyframe(ref_);
+  const double span = static_cast<double>(t_last - frames_.front().t);
+  const std::vector<BootstrapFrame> before(frames_.begin(), frames_.begin() + count);
+  SE3 T_prev_result;  // reference (k = 0): identity
+  for (std::size_t k = 1; k < count; ++k) {
+    SE3 step = before[k - 1].T_ref_c.inverse() * before[k].T_ref_c;
+    step.translation() *= scale;
+    const SE3 candidates[2] = {
+        (T_prev_result * step).inverse(),
+        interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
+            .inverse()};
+    BootstrapFrame best{frames_[k].t, candidates[0].inverse(), frames_[k].a, frames_[k].b};
+    double best_rmse = 1e9;
+    int won = -1;
+    for (int c = 0; c < 2; ++c) {
+      double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
+      SE3 T_track = candidates[c];
+      const FrameTrackResult tr = tracker.track(images_[k], T_track, alpha, beta);
+      if (tr.ok && alpha > 0 && tr.rmse < best_rmse) {
+        best_rmse = tr.rmse, won = c;
+        best = {frames_[k].t, T_track.inverse(), std::log(alpha), beta};
+      }
+    }
+    if (logEnabled(LogLevel::kDebug))
+      logf(LogLevel::kDebug, "bootstrap: frame %zu aligned to the map: %s, rmse %.4f", k,
+           won < 0    ? "failed from both starts"
+           : won == 0 ? "from the motion"
+                      : "from the geodesic",
+           best_rmse);
+    frames_[k] = best;
+    T_prev_result = best.T_ref_c;
+  }
+}
+
+void Bootstrap::refineWithViews(const cv::Mat& last_image) {
+  const std::size_t n = frames_.size();
+  const int views = std::min<int>(cfg_.final_views - 1, static_cast<int>(n) - 1);  // besides the reference
+  if (views < 2) return;
+  std::vector<std::size_t> pick;
+  for (int j = 1; j <= views; ++j)
+    pick.push_back(static_cast<std::size_t>(std::lround(j * (n - 1.0) / views)));
+  std::vector<BaFrame> fr(1 + pick.size());
+  fr[0].image = ref_.image;
+  fr[0].fixed = true;
+  for (std::size_t j = 0; j < pick.size(); ++j) {
+    const BootstrapFrame& f = frames_[pick[j]];
+    fr[j + 1].image = pick[j] < images_.size() ? images_[pick[j]] : last_image;
+    fr[j + 1].T_w_c = f.T_ref_c, fr[j + 1].a = f.a, fr[j + 1].b = f.b;
+  }
+  std::vector<BaPoint> pts;
+  std::vector<std::size_t> which;
+  for (std::size_t i = 0; i < ref_.points.size(); ++i) {
+    if (!(ref_.points[i].inv_depth > 0)) continue;
+    BaPoint bp;
+    bp.host = 0, bp.u = ref_.points[i].u, bp.v = ref_.points[i].v;
+    bp.inv_depth = ref_.points[i].inv_depth;
+    for (std::size_t j = 1; j < fr.size(); ++j) bp.targets.push_back(static_cast<int>(j));
+    pts.push_back(std::move(bp));
+    which.push_back(i);
+  }
+  BaConfig bc = cfg_.ba;
+  bc.iterations = 2 * cfg_.ba.iterations;
+  const BaStats st = PhotometricBA(cam_, bc).optimize(fr, pts);
+  int inliers = 0;
+  for (const BaPoint& p : pts) inliers += !p.outlier;
+  if (logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug, "bootstrap: %d views, %d of %zu points kept, rmse %.4f -> %.4f", views + 1,
+         inliers, pts.size(), st.initial_rmse, st.final_rmse);
+  if (inliers < cfg_.min_points || st.final_rmse > cfg_.max_rmse) return;
+  for (std::size_t j = 0; j < pts.size(); ++j)
+    ref_.points[which[j]].inv_depth = pts[j].outlier ? 0.0 : pts[j].inv_depth;
+  for (std::size_t j = 0; j < pick.size(); ++j)
+    frames_[pick[j]] = {frames_[pick[j]].t, fr[j + 1].T_w_c, fr[j + 1].a, fr[j + 1].b};
+  parallax_ = translationParallax(frames_.back().T_ref_c.inverse());
+  realignFrames(frames_.back().t, frames_.back().T_ref_c, 1.0, n - 1);
 }
 
 bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const GeometricInitResult& g) {
@@ -284,40 +370,15 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   if (inliers < cfg_.min_points) return false;
   ref_ = std::move(ref);
   rmse_ = st.final_rmse;
-  // The frames in between: aligned to the new map. Starting points: the previous frame's result moved
-  // by the photometric path's relative motion (its rotation is good, its translation is rescaled to the
-  // geometric one), and the geodesic between the reference and the last frame; the better fit wins.
+  // The frames in between: aligned to the new map, the photometric path's relative motion rescaled to
+  // the geometric translation.
   const SE3 T_ref_last = fr[1].T_w_c;
-  FrameTracker tracker(cam_, cfg_.tracker);
-  tracker.setKeyframe(ref_);
-  const double span = static_cast<double>(t - frames_.front().t);
-  const std::vector<BootstrapFrame> photometric = frames_;
   const double photo_len = frames_.back().T_ref_c.translation().norm();
-  const double scale = photo_len > 1e-9 ? T_ref_last.translation().norm() / photo_len : 1.0;
-  SE3 T_prev_result;  // reference (k = 0): identity
-  for (std::size_t k = 1; k < frames_.size(); ++k) {
-    SE3 step = photometric[k - 1].T_ref_c.inverse() * photometric[k].T_ref_c;  // photometric motion k-1 -> k
-    step.translation() *= scale;
-    const SE3 candidates[2] = {
-        (T_prev_result * step).inverse(),
-        interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
-            .inverse()};
-    BootstrapFrame best{frames_[k].t, candidates[0].inverse(), frames_[k].a, frames_[k].b};
-    double best_rmse = 1e9;
-    for (const SE3& T_c_ref : candidates) {
-      double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
-      SE3 T_track = T_c_ref;
-      const FrameTrackResult tr = tracker.track(images_[k], T_track, alpha, beta);
-      if (tr.ok && alpha > 0 && tr.rmse < best_rmse) {
-        best_rmse = tr.rmse;
-        best = {frames_[k].t, T_track.inverse(), std::log(alpha), beta};
-      }
-    }
-    frames_[k] = best;
-    T_prev_result = best.T_ref_c;
-  }
+  realignFrames(t, T_ref_last, photo_len > 1e-9 ? T_ref_last.translation().norm() / photo_len : 1.0,
+                frames_.size());
   frames_.push_back({t, T_ref_last, fr[1].a, fr[1].b});
   parallax_ = translationParallax(T_ref_last.inverse());
+  refineWithViews(image);
   geometric_used_ = true;
   normalizeScale();
   done_ = true;

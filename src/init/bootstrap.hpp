@@ -33,7 +33,10 @@ struct BootstrapConfig {
       .tile = 8, .fraction = 0.06, .min_gradient = 0.01, .border = 4, .max_points = 1500};
   FrameTrackerConfig tracker;
   BaConfig ba{.iterations = 6};
-  int ba_levels = 1;                 // pyramid levels of the two-frame BA (1: full resolution only)
+  int ba_levels = 1;  // pyramid levels of the two-frame BA (1: full resolution only)
+  // Views in the bundle adjustment that completes the initialization: the reference, the last frame
+  // and frames spread between (2: the reference and the last frame alone).
+  int final_views = 2;
   double depth_prior_weight = 0.02;  // ½ w (ρ − 1)² per point; intensity units² per (1/m)²
   double min_parallax_px = 8.0;      // RMS pixel flow of the translation alone, to declare success
   // With frames this far apart (s) or more, this much parallax is enough: waiting for more costs a
@@ -56,7 +59,7 @@ struct BootstrapConfig {
   void validate() const;
 };
 
-EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, depth_prior_weight, min_parallax_px,
+EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, final_views, depth_prior_weight, min_parallax_px,
            sparse_frame_interval_s, min_parallax_px_sparse, min_points, min_frames, max_frames,
            max_parallax_step_px, max_rmse, max_log_brightness, max_intensity, min_intensity, geometric,
            geometric_init, fill)
@@ -104,7 +107,14 @@ class Bootstrap {
   BootstrapConfig cfg_;
   Keyframe ref_;
   bool initFromGeometry(TimeNs t, const cv::Mat& image, const GeometricInitResult& g);
+  // Mean inverse depth 1 (translations to match); the frames' images are no longer needed.
   void normalizeScale();
+  // Frames 1 .. count-1 (their images kept) aligned to the reference's current map; the frames'
+  // present poses give the starts, their translations times `scale`; the last frame is at T_ref_last.
+  void realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count);
+  // The reference's depths and final_views - 1 of the frames since (the last one, image `last_image`,
+  // among them) in one bundle adjustment; then every other frame aligned again to the result.
+  void refineWithViews(const cv::Mat& last_image);
   // After the photometric path failed: keeps the frame for the geometric path, or restarts.
   bool keepForGeometry(TimeNs t, const cv::Mat& image);
 

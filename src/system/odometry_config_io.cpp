@@ -192,6 +192,12 @@ OdometryConfig defaultOdometryConfig(int width, int height) {
   c.event_frame.overlap = 0.5 + f * 0.1;
   c.events.points.fraction = 0.12 + f * (0.07 - 0.12);
   if (f >= 0.5) c.frame_tracker.levels += 1, c.bootstrap.tracker.levels += 1;
+  // Corner tracks are as many pixels off on a larger sensor, where the scene's texture is spread over
+  // more of them: 1 / 2 px kept 123 essential-matrix inliers at 640x480, 2 / 4 px 400.
+  c.bootstrap.geometric_init.ransac_px *= 1 + f;
+  c.bootstrap.geometric_init.max_reproj_px *= 1 + f;
+  // Five views in the bundle adjustment that completes the initialization (docs/experiments.md).
+  if (f >= 1) c.bootstrap.final_views = 5;
   c.backend.points_per_keyframe = static_cast<int>(std::lround(300 * (1 + f)));
   // From 640x480 on, event rates of 10 M/s and more would make 400 event frames a second and more:
   // at most 100 keep the work and the memory bounded for a small loss (docs/experiments.md).

@@ -15,7 +15,9 @@ namespace eds {
 namespace {
 
 template <class T>
-constexpr bool kNested = requires(T& t) { visitFields([](const char*, auto&) {}, t); };
+constexpr bool kNested = requires(T& t) {
+  visitFields([](const char*, auto&) {}, t);
+};
 
 // Every configuration struct reached from OdometryConfig lists all of its members in visitFields.
 struct CheckListed {
@@ -30,8 +32,8 @@ struct CheckListed {
     std::size_t listed = 0;
     visitFields([&listed](const char*, auto&) { ++listed; }, cfg);
     if (listed != fieldCount<T>())
-      problems->push_back(where + ": " + std::to_string(fieldCount<T>()) + " members, " + std::to_string(listed) +
-                          " listed in visitFields");
+      problems->push_back(where + ": " + std::to_string(fieldCount<T>()) + " members, " +
+                          std::to_string(listed) + " listed in visitFields");
     CheckListed nested{where + ".", problems};
     visitFields(nested, cfg);
   }
@@ -161,7 +163,7 @@ TEST(OdometryConfigIo, RoundTripsEveryParameter) {
 TEST(OdometryConfigIo, PartialFileOverridesOnlyWhatItNames) {
   const auto dir = test::tempDir("config_partial");
   std::ofstream(dir / "c.yaml") << "backend:\n  window: 9\npolicy: {flow_t: 0.03}\n"
-                                  "bootstrap: {tracker: {levels: 3}}\n";
+                                   "bootstrap: {tracker: {levels: 3}}\n";
   OdometryConfig c;
   loadOdometryConfig(dir / "c.yaml", c);
   EXPECT_EQ(c.backend.window, 9);
@@ -213,6 +215,11 @@ TEST(OdometryConfigIo, DefaultsFollowTheSensorSize) {
   EXPECT_EQ(vga.backend.points_per_keyframe, 2 * base.backend.points_per_keyframe);
   EXPECT_EQ(small.event_frame.max_rate_hz, 0.0);  // no cap where event rates are a few M/s
   EXPECT_EQ(vga.event_frame.max_rate_hz, 100.0);
+  EXPECT_EQ(small.bootstrap.geometric_init.ransac_px, base.bootstrap.geometric_init.ransac_px);
+  EXPECT_EQ(vga.bootstrap.geometric_init.ransac_px, 2 * base.bootstrap.geometric_init.ransac_px);
+  EXPECT_EQ(vga.bootstrap.geometric_init.max_reproj_px, 2 * base.bootstrap.geometric_init.max_reproj_px);
+  EXPECT_EQ(small.bootstrap.final_views, base.bootstrap.final_views);
+  EXPECT_EQ(vga.bootstrap.final_views, 5);
   EXPECT_EQ(defaultOdometryConfig(1280, 720).event_frame.num_events, 80000);
   // DAVIS346 (346x260) lies in between.
   const int n346 = defaultOdometryConfig(346, 260).event_frame.num_events;

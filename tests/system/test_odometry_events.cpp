@@ -146,7 +146,7 @@ void runEsimAt(double frame_rate, test::Measured refined) {
   test::expectAccuracy("ESIM, frames at " + test::hz(frame_rate) + ", refined", ar, refined);
 }
 
-TEST(EventsAndFrames, EsimFramesAt2p5Hz) { runEsimAt(2.5, {0.200, 0.128}); }
+TEST(EventsAndFrames, EsimFramesAt2p5Hz) { runEsimAt(2.5, {0.207, 0.135}); }
 TEST(EventsAndFrames, EsimFramesAt1Hz) { runEsimAt(1.0, {0.596, 0.274}); }
 
 // The whole ESIM sequence at its 25 Hz frames: the event-rate poses as tracked (what a live user had)
@@ -163,9 +163,9 @@ TEST(EventsAndFrames, EsimFullFrameRate) {
   const eval::AteResult live = eval::evaluateAte(r.events, gt, eval::EvalConfig{});
   const eval::AteResult refined = eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{});
   const eval::AteResult frames = eval::evaluateAte(r.frames_refined, gt, eval::EvalConfig{});
-  test::expectAccuracy("ESIM, events, as tracked", live, {0.127, 0.192});
-  test::expectAccuracy("ESIM, events, refined", refined, {0.092, 0.113});
-  test::expectAccuracy("ESIM, frame poses of the events run, refined", frames, {0.089, 0.111});
+  test::expectAccuracy("ESIM, events, as tracked", live, {0.124, 0.188});
+  test::expectAccuracy("ESIM, events, refined", refined, {0.087, 0.111});
+  test::expectAccuracy("ESIM, frame poses of the events run, refined", frames, {0.064, 0.085});
   EXPECT_GE(refined.coverage, 0.95);
 }
 
@@ -200,7 +200,7 @@ TEST(EventsAndFrames, EsimThreeSecondsWithoutFrames) {
   EXPECT_GE(r.events_tracked, r.event_frames * 95 / 100);
   EXPECT_GE(in_gap, 200u);
   EXPECT_GE(a.coverage, 0.9);
-  test::expectAccuracy("ESIM, no frames 2-5 s, as tracked", a, {0.240, 0.176});
+  test::expectAccuracy("ESIM, no frames 2-5 s, as tracked", a, {0.238, 0.175});
 }
 
 TEST(EventsAndFrames, MissingEventsIsAClearError) {
