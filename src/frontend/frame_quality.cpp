@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -27,10 +28,13 @@ std::string describe(const char* format, double value) {
 FrameQualityGate::FrameQualityGate(const FrameQualityConfig& cfg) : cfg_(cfg) {
   const auto fraction = [](double v) { return v > 0 && v <= 1; };
   if (!fraction(cfg.max_saturated) || !fraction(cfg.max_dark) || !(cfg.min_texture_ratio >= 0) ||
-      !(cfg.max_brightness_ratio >= 1) || cfg.history < 1 || !(cfg.relearn_after_s >= 0))
+      !(cfg.max_brightness_ratio >= 1) || cfg.history < 1 || !(cfg.relearn_after_s >= 0) ||
+      !(cfg.refused_max_shift > 0) || !(cfg.refused_max_turn_deg > 0) ||
+      !(cfg.refused_min_residuals >= 0 && cfg.refused_min_residuals <= 1))
     throw std::invalid_argument(
         "frame_quality: max_saturated and max_dark must be in (0, 1], min_texture_ratio >= 0, "
-        "max_brightness_ratio >= 1, history >= 1, relearn_after_s >= 0");
+        "max_brightness_ratio >= 1, history >= 1, relearn_after_s >= 0, refused_max_shift and "
+        "refused_max_turn_deg > 0, refused_min_residuals in [0, 1]");
 }
 
 FrameStats measureFrame(const cv::Mat& gray8) {
@@ -52,6 +56,18 @@ FrameStats measureFrame(const cv::Mat& gray8) {
   return {sum / n, saturated / n, dark / n, grad / n};
 }
 
+cv::Mat normalizeRefusedFrame(const cv::Mat& gray8, double ref_mean) {
+  CV_Assert(gray8.type() == CV_8UC1);
+  const cv::Mat valid = (gray8 > 0) & (gray8 < 250);
+  const int n = cv::countNonZero(valid);
+  if (n == 0 || !(ref_mean > 0)) return {};
+  const double scale = ref_mean / cv::mean(gray8, valid)[0] / 255.0;
+  cv::Mat out;
+  gray8.convertTo(out, CV_32F, scale);
+  out.setTo(std::numeric_limits<float>::quiet_NaN(), ~valid);
+  return out;
+}
+
 std::string FrameQualityGate::absoluteProblem(const FrameStats& s) const {
   if (s.saturated > cfg_.max_saturated)
     return describe("overexposed (%.0f %% of the pixels saturated)", 100 * s.saturated);
@@ -70,6 +86,13 @@ std::string FrameQualityGate::relativeProblem(const FrameStats& s) const {
   if (ratio > cfg_.max_brightness_ratio || ratio < 1.0 / cfg_.max_brightness_ratio)
     return describe("sudden exposure change (brightness x%.2f of the recent frames')", ratio);
   return {};
+}
+
+double FrameQualityGate::referenceMean() const {
+  if (accepted_.empty()) return 0;
+  std::vector<double> means;
+  for (const FrameStats& a : accepted_) means.push_back(a.mean);
+  return median(means);
 }
 
 std::string FrameQualityGate::check(TimeNs t, const cv::Mat& gray8) {

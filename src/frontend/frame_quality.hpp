@@ -22,10 +22,20 @@ struct FrameQualityConfig {
   // A new normal: after this long of frames refused only against the recent ones (none absolutely),
   // the reference starts again from the current frames (a light switched off for good).
   double relearn_after_s = 2.0;
+  // A refused frame still gives a pose, never a keyframe or map point: its clipped pixels left out and
+  // its brightness scaled to the recent frames', it is aligned from the events' pose and kept when it
+  // lands within these bounds of it (translation as a fraction of the scene's median depth) on at
+  // least this fraction of the residuals the last usable frame had (a frame blown out but for a few
+  // dark spots does not hold the pose).
+  bool track_refused = true;
+  double refused_max_shift = 0.02;
+  double refused_max_turn_deg = 2.0;
+  double refused_min_residuals = 0.25;
 };
 
 EDS_FIELDS(FrameQualityConfig, enabled, max_saturated, max_dark, min_texture_ratio, max_brightness_ratio,
-           history, relearn_after_s)
+           history, relearn_after_s, track_refused, refused_max_shift, refused_max_turn_deg,
+           refused_min_residuals)
 
 struct FrameStats {
   double mean = 0;       // intensity, 0..255
@@ -36,11 +46,18 @@ struct FrameStats {
 
 FrameStats measureFrame(const cv::Mat& gray8);
 
+// A refused frame made fit for alignment: CV_32F, its clipped pixels (0, or 250 and above) NaN, the
+// others scaled so that their mean is `ref_mean` / 255 (the recent frames' brightness; the alignment's
+// own brightness parameters absorb what the clipping biases). Empty when no pixel is left.
+cv::Mat normalizeRefusedFrame(const cv::Mat& gray8, double ref_mean);
+
 class FrameQualityGate {
  public:
   explicit FrameQualityGate(const FrameQualityConfig& cfg);
   // Empty when the frame at time t can be used (it then joins the reference); else why it cannot.
   std::string check(TimeNs t, const cv::Mat& gray8);
+  // Median mean intensity of the recent accepted frames (0 before the first).
+  double referenceMean() const;
 
  private:
   std::string absoluteProblem(const FrameStats& s) const;

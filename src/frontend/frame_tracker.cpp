@@ -83,7 +83,9 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double a
     const double u = c.fx * q.x() * iz + c.cx, v = c.fy * q.y() * iz + c.cy;
     if (!(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
     double dx, dy;
-    r.push_back(sampleBilinear(img, u, v, dx, dy) - (alpha * lp.ref + beta));
+    const double I = sampleBilinear(img, u, v, dx, dy);
+    if (!std::isfinite(I)) continue;  // a pixel marked as holding no information (clipped)
+    r.push_back(I - (alpha * lp.ref + beta));
     if (J) {
       const Vec3 dI_dq(dx * c.fx * iz, dy * c.fy * iz, -(dx * c.fx * q.x() + dy * c.fy * q.y()) * iz * iz);
       Eigen::Matrix<double, 1, 8> row;

@@ -44,7 +44,8 @@ class FrameTracker {
   // Keyframe image pyramid and 3D points of its points with depth.
   void setKeyframe(const Keyframe& kf);
   // Refines T_f_kf (frame from keyframe) and α, β, from their initial values. `frame` is the
-  // undistorted image, CV_32F in [0, 1].
+  // undistorted image, CV_32F in [0, 1]; NaN marks pixels that hold no information (clipped), whose
+  // residuals are left out.
   // levels > 0: start at that many levels from the finest (a good initial pose, e.g. the event
   // tracker's, needs no coarse levels); 0: all.
   FrameTrackResult track(const cv::Mat& frame, SE3& T_f_kf, double& alpha, double& beta,

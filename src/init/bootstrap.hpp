@@ -113,7 +113,8 @@ class Bootstrap {
   // present poses give the starts, their translations times `scale`; the last frame is at T_ref_last.
   void realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count);
   // The reference's depths and final_views - 1 of the frames since (the last one, image `last_image`,
-  // among them) in one bundle adjustment; then every other frame aligned again to the result.
+  // among them) in one bundle adjustment; then every frame but the last (those in it as well) aligned
+  // again to its depths.
   void refineWithViews(const cv::Mat& last_image);
   // After the photometric path failed: keeps the frame for the geometric path, or restarts.
   bool keepForGeometry(TimeNs t, const cv::Mat& image);

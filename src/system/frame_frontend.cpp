@@ -125,6 +125,17 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   return T_w_out;
 }
 
+std::optional<SE3> FrameFrontend::trackOnly(const cv::Mat& img, const SE3& prior, FrameTrackResult& tr) {
+  adoptReference(false);
+  tr = {};
+  if (!has_ref_) return std::nullopt;
+  SE3 T_f_kf = prior.inverse() * T_w_kf_;
+  double alpha = 1, beta = 0;
+  tr = tracker_.track(img, T_f_kf, alpha, beta, cfg_.prior_levels);
+  if (!tr.ok) return std::nullopt;
+  return T_w_kf_ * T_f_kf.inverse();
+}
+
 std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& found) {
   adoptReference(cfg_.threaded_backend);
   if (!has_ref_) {
@@ -256,7 +267,7 @@ FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3&
       T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
     }
   }
-  if (tr.ok) last_rmse_ = tr.rmse;
+  if (tr.ok) last_rmse_ = tr.rmse, last_residuals_ = tr.residuals;
   return tr;
 }
 

@@ -34,6 +34,12 @@ class FrameFrontend {
   // tried first. Adds a keyframe when the policy asks.
   SE3 track(TimeNs t, const cv::Mat& img, const SE3* prior = nullptr);
   bool lastTrackOk() const { return last_ok_; }
+  // Residuals of the last successful alignment of a usable frame.
+  int lastResiduals() const { return last_residuals_; }
+  // A frame kept out of keyframes and the map (the quality check refused it), aligned from `prior`
+  // alone with brightness (α, β) starting at (1, 0): the caller has normalized it. Its pose, or nullopt
+  // when the alignment failed; the front-end's state does not change (setLast, if the pose is kept).
+  std::optional<SE3> trackOnly(const cv::Mat& img, const SE3& prior, FrameTrackResult& tr);
   // The frame's pose with no starting point (features against the newest reference, then the direct
   // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when
   // neither finds the frame. `found` says how (matches and inliers), or why not.
@@ -82,6 +88,7 @@ class FrameFrontend {
   double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;
   double a_last_ = 0, b_last_ = 0;  // absolute brightness of the last frame
   double last_rmse_ = 1e9;          // of the last successful alignment
+  int last_residuals_ = 0;          // and its residual count
   SE3 last_T_w_f_, prev_T_w_f_;
   bool has_last_ = false, has_prev_ = false;
   Pending pending_;

@@ -202,6 +202,7 @@ struct OdometryResult {
   std::size_t frames_in = 0, tracked = 0;
   std::size_t events_flicker_dropped = 0;  // events of flickering pixels, never put into event frames
   std::size_t frames_rejected = 0;         // kept out by the frame quality check (each one also a failure)
+  std::size_t frames_tracked_only = 0;     // of those, the frames that still gave a pose (not a keyframe)
   std::size_t backend_waits = 0;           // times the tracking thread waited for the threaded back-end
   std::size_t buffered_thinned = 0;        // times the event frames kept during the bootstrap were thinned
   bool initialized = false;

@@ -39,6 +39,7 @@ class OdometryCore {
  private:
   void bootstrapFrame(TimeNs t, const cv::Mat& img);
   void trackFrame(TimeNs t, const cv::Mat& img);
+  bool trackRefused(TimeNs t, const cv::Mat& raw);  // true: the refused frame gave a pose
   void initialize(TimeNs t, const cv::Mat& img);
   void trackBufferedEvents(const Trajectory& boot_traj);
   bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found);

@@ -238,6 +238,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                          {"restarts", r.init_restarts}};
   j["counts"] = {{"frames", r.frames_in},
                  {"frames_rejected", r.frames_rejected},
+                 {"frames_tracked_only", r.frames_tracked_only},
                  {"poses", r.frames.size()},
                  {"tracked", r.tracked},
                  {"failures", r.failures.size()},

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -32,6 +34,23 @@ Keyframe planeKeyframe(const cv::Mat& img) {
   for (int y = 8; y < img.rows - 8; y += 3)
     for (int x = 8; x < img.cols - 8; x += 3) kf.points.push_back({float(x), float(y), 0.f, 0.f, 0.5});
   return kf;
+}
+
+// The keyframe's plane seen from T_f_kf: for each frame pixel, its ray hits the plane z = 2.
+cv::Mat planeFrame(const cv::Mat& img, const CameraModel& cam, const SE3& T_f_kf) {
+  const SE3 T_kf_f = T_f_kf.inverse();
+  cv::Mat frame(img.size(), CV_32F), mx(img.size(), CV_32F), my(img.size(), CV_32F);
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x) {
+      const Vec3 ray = T_kf_f.so3() * cam.unproject(Vec2(x, y));
+      const Vec3& o = T_kf_f.translation();
+      const double s = (2.0 - o.z()) / ray.z();
+      const Vec2 u = cam.project(o + s * ray);
+      mx.at<float>(y, x) = static_cast<float>(u.x());
+      my.at<float>(y, x) = static_cast<float>(u.y());
+    }
+  cv::remap(img, frame, mx, my, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  return frame;
 }
 
 TEST(FrameTracker, JacobianMatchesNumericDifferences) {
@@ -84,20 +103,8 @@ TEST(FrameTracker, RecoversAKnownMotionOfAPlane) {
   // the affine model would read as a contrast change.
   const cv::Mat img = texture(5, 4.0);
   ft.setKeyframe(planeKeyframe(img));
-  // Render the frame: for each frame pixel, its ray hits the plane z = 2 in the keyframe.
   const SE3 T_f_kf(SO3::exp(Vec3(0.01, 0.015, -0.01)), Vec3(0.04, -0.02, 0.03));
-  const SE3 T_kf_f = T_f_kf.inverse();
-  cv::Mat frame(img.size(), CV_32F), mx(img.size(), CV_32F), my(img.size(), CV_32F);
-  for (int y = 0; y < img.rows; ++y)
-    for (int x = 0; x < img.cols; ++x) {
-      const Vec3 ray = T_kf_f.so3() * cam.unproject(Vec2(x, y));
-      const Vec3& o = T_kf_f.translation();
-      const double s = (2.0 - o.z()) / ray.z();
-      const Vec2 u = cam.project(o + s * ray);
-      mx.at<float>(y, x) = static_cast<float>(u.x());
-      my.at<float>(y, x) = static_cast<float>(u.y());
-    }
-  cv::remap(img, frame, mx, my, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  cv::Mat frame = planeFrame(img, cam, T_f_kf);
   frame = frame * 1.1 + 0.02;  // an exposure change: the affine brightness must absorb it
   SE3 T;                       // from identity: 2.5 px and ~1 deg away
   double a = 1, b = 0;
@@ -122,6 +129,37 @@ TEST(FrameTracker, RecoversAKnownMotionOfAPlane) {
   EXPECT_TRUE(rq.ok);
   EXPECT_LT(rq.evaluations, res.evaluations);
   EXPECT_LT((Tq.inverse() * T).log().norm(), 1e-5);
+}
+
+// An overexposed frame: x1.6 and clipped at 0.9, its clipped pixels marked NaN (as a refused frame is
+// prepared). Only the pixels that still hold the scene count, and the pose and gain come out right;
+// the clipped values themselves would read as a plane of constant brightness.
+TEST(FrameTracker, PixelsMarkedNaNAreLeftOut) {
+  const CameraModel cam = camera();
+  FrameTracker ft(cam, {});
+  const cv::Mat img = texture(5, 4.0);
+  ft.setKeyframe(planeKeyframe(img));
+  const SE3 T_f_kf(SO3::exp(Vec3(0.01, 0.015, -0.01)), Vec3(0.04, -0.02, 0.03));
+  cv::Mat frame = cv::min(planeFrame(img, cam, T_f_kf) * 1.6, 0.9);
+  frame.setTo(std::numeric_limits<float>::quiet_NaN(), frame >= 0.9f);
+  int marked = 0;
+  for (auto it = frame.begin<float>(); it != frame.end<float>(); ++it) marked += std::isnan(*it);
+  std::printf("[ frame tracker, clipped pixels left out ] %.0f %% of the pixels marked\n",
+              100.0 * marked / frame.total());
+  ASSERT_GT(marked, static_cast<int>(frame.total() / 4));
+  SE3 T;
+  double a = 1, b = 0;
+  const FrameTrackResult res = ft.track(frame, T, a, b);
+  SE3 T_all;
+  double a_all = 1, b_all = 0;
+  const FrameTrackResult all = ft.track(planeFrame(img, cam, T_f_kf), T_all, a_all, b_all);
+  std::printf("[ frame tracker, clipped pixels left out ] %d of %d residuals, t err %.3f mm, a %.3f\n",
+              res.residuals, all.residuals, (T.translation() - T_f_kf.translation()).norm() * 1e3, a);
+  EXPECT_TRUE(res.ok);
+  EXPECT_LT(res.residuals, 2 * all.residuals / 3);
+  EXPECT_LT((T.translation() - T_f_kf.translation()).norm(), 2e-3);
+  EXPECT_LT((T.so3().inverse() * T_f_kf.so3()).angle() * 180 / M_PI, 0.05);
+  EXPECT_NEAR(a, 1.6, 0.05);
 }
 
 }  // namespace

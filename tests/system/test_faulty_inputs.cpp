@@ -124,15 +124,24 @@ void expectCarriedThrough(Variant v, double ratio) {
     EXPECT_TRUE(dim || bright) << "failure at " << s << " s: " << f.reason;
     causes[f.reason.substr(0, f.reason.find(" ("))] += 1;
   }
-  EXPECT_EQ((causes["frame not used: low contrast or blurred"] + causes["frame not used: too dark"]), 20);
+  // The dimmed frames still hold the scene: aligned from the events' pose, each gives a pose (never a
+  // keyframe). The blown-out ones keep too few pixels to be trusted.
+  EXPECT_EQ((causes["frame kept out of the map: low contrast or blurred"] +
+             causes["frame kept out of the map: too dark"]),
+            20);
   EXPECT_EQ(causes["frame not used: overexposed"], 10);
+  EXPECT_EQ(r.frames_tracked_only, 20u);
+  for (const StampedPose& kf : r.keyframes) {
+    const double s = toSeconds(kf.t - r.first_t);
+    EXPECT_FALSE((s >= 2.99 && s < 4.0) || (s >= 4.99 && s < 5.5)) << "keyframe at " << s << " s";
+  }
   EXPECT_LE(lost_event_frames, r.events_tracked / 100);
 }
 
-// Not within the 1.5x asked for: where no frame anchors them (1.5 s of the 8) the event-rate poses are
-// 2-4x the anchored ones' error, and the clean runs are anchored throughout (measured 0.047 against
-// 0.028 cm sharp, 0.121 against 0.066 cm blurred; docs/experiments.md).
-TEST(BadFrames, DimmedAndOverexposedFramesSharp) { expectCarriedThrough({0.01, true}, 1.8); }
+// Sharp: 0.041 against 0.028 cm (1.46x). Blurred, not within the 1.5x asked for: over the half second
+// of blown-out frames nothing anchors the event-rate poses, and against the blurred keyframes the event
+// tracker strays up to 1.5 cm there (0.119 against 0.066 cm; docs/experiments.md).
+TEST(BadFrames, DimmedAndOverexposedFramesSharp) { expectCarriedThrough({0.01, true}, 1.5); }
 TEST(BadFrames, DimmedAndOverexposedFramesMotionBlur) { expectCarriedThrough({0.04, true}, 2.0); }
 
 // The flickering pixels' events are dropped before the event frames.
