@@ -23,8 +23,9 @@ struct FrameQualityConfig {
   // the reference starts again from the current frames (a light switched off for good).
   double relearn_after_s = 2.0;
   // A refused frame still gives a pose, never a keyframe or map point: its clipped pixels left out and
-  // its brightness scaled to the recent frames', it is aligned from the events' pose and kept when it
-  // lands within these bounds of it (translation as a fraction of the scene's median depth) on at
+  // its brightness scaled to the recent frames', it is aligned from the events' pose (without events,
+  // the constant-velocity prediction) and kept when it lands within these bounds of that start
+  // (translation as a fraction of the reference keyframe's median depth) on at
   // least this fraction of the residuals the last usable frame had (a frame blown out but for a few
   // dark spots does not hold the pose).
   bool track_refused = true;

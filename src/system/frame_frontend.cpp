@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/log.hpp"
 #include "mapping/depth_fill.hpp"
 #include "system/run_stats.hpp"
 
@@ -125,15 +126,31 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   return T_w_out;
 }
 
-std::optional<SE3> FrameFrontend::trackOnly(const cv::Mat& img, const SE3& prior, FrameTrackResult& tr) {
+std::optional<SE3> FrameFrontend::trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior) {
   adoptReference(false);
-  tr = {};
-  if (!has_ref_) return std::nullopt;
-  SE3 T_f_kf = prior.inverse() * T_w_kf_;
+  if (!has_ref_ || !has_last_) return std::nullopt;
+  SE3 T_w_start = last_T_w_f_;
+  if (prior)
+    T_w_start = *prior;
+  else if (has_prev_)
+    T_w_start = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+  SE3 T_f_kf = T_w_start.inverse() * T_w_kf_;
   double alpha = 1, beta = 0;
-  tr = tracker_.track(img, T_f_kf, alpha, beta, cfg_.prior_levels);
-  if (!tr.ok) return std::nullopt;
-  return T_w_kf_ * T_f_kf.inverse();
+  const FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta, cfg_.prior_levels);
+  const SE3 T_w_f = T_w_kf_ * T_f_kf.inverse();
+  const SE3 T_start_f = T_w_start.inverse() * T_w_f;
+  const FrameQualityConfig& q = cfg_.frame_quality;
+  logf(LogLevel::kDebug,
+       "refused frame %.3f: %d residuals, rmse %.4f, %.3f cm / %.3f deg from its start (%s)", toSeconds(t),
+       tr.residuals, tr.rmse, 100 * T_start_f.translation().norm(), T_start_f.so3().angle() * 180 / M_PI,
+       prior ? "events" : "constant velocity");
+  if (!tr.ok || tr.residuals < q.refused_min_residuals * last_residuals_ ||
+      T_start_f.translation().norm() > q.refused_max_shift / medianInvDepth(ref_.points) ||
+      T_start_f.so3().angle() > q.refused_max_turn_deg * M_PI / 180.0)
+    return std::nullopt;
+  ++res_.tracked;
+  setLast(T_w_f);
+  return T_w_f;
 }
 
 std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& found) {

@@ -34,12 +34,12 @@ class FrameFrontend {
   // tried first. Adds a keyframe when the policy asks.
   SE3 track(TimeNs t, const cv::Mat& img, const SE3* prior = nullptr);
   bool lastTrackOk() const { return last_ok_; }
-  // Residuals of the last successful alignment of a usable frame.
-  int lastResiduals() const { return last_residuals_; }
-  // A frame kept out of keyframes and the map (the quality check refused it), aligned from `prior`
-  // alone with brightness (α, β) starting at (1, 0): the caller has normalized it. Its pose, or nullopt
-  // when the alignment failed; the front-end's state does not change (setLast, if the pose is kept).
-  std::optional<SE3> trackOnly(const cv::Mat& img, const SE3& prior, FrameTrackResult& tr);
+  // A frame kept out of keyframes and the map (the quality check refused it; the caller has prepared it
+  // with normalizeRefusedFrame), aligned from `prior` (the events' pose) or else the constant-velocity
+  // prediction, with brightness (α, β) from (1, 0). Its pose when the alignment succeeded on enough
+  // residuals and landed within the frame_quality bounds of its start (it then becomes the last pose),
+  // else nullopt and nothing changes.
+  std::optional<SE3> trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior);
   // The frame's pose with no starting point (features against the newest reference, then the direct
   // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when
   // neither finds the frame. `found` says how (matches and inliers), or why not.

@@ -7,7 +7,6 @@
 #include <limits>
 #include <unordered_map>
 
-#include "core/log.hpp"
 #include "system/run_stats.hpp"
 #include "system/trajectory_smoothing.hpp"
 
@@ -75,35 +74,21 @@ void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
 }
 
 // Bright or dark as it may be, a refused frame still holds the scene where it is not clipped: the pose
-// it gives anchors the events' (which otherwise drift until the next usable frame). It is aligned only
-// from the events' pose and kept only close to it, and never becomes a keyframe.
+// it gives anchors the events' (which otherwise drift until the next usable frame), or bridges the gap
+// a frames-only run would lose its track over. It never becomes a keyframe.
 bool OdometryCore::trackRefused(TimeNs t, const cv::Mat& raw) {
-  const FrameQualityConfig& q = cfg_.frame_quality;
-  if (!q.track_refused || !initialized_ || lost_ || !has_event_pose_ ||
-      std::llabs(t - last_event_.t) >= fromSeconds(0.05))
-    return false;
+  if (!cfg_.frame_quality.track_refused || !initialized_ || lost_) return false;
   const cv::Mat norm = normalizeRefusedFrame(raw, quality_.referenceMean());
   if (norm.empty()) return false;
   const ScopedStage stage(&clock_, Stage::kFrameTracking);
-  FrameTrackResult tr;
-  const std::optional<SE3> T_w_f = odo_->trackOnly(und_.undistortImage(norm), last_event_.T_w_c, tr);
+  const bool event_prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
+  const std::optional<SE3> T_w_f =
+      odo_->trackRefused(t, und_.undistortImage(norm), event_prior ? &last_event_.T_w_c : nullptr);
   if (!T_w_f) return false;
-  const SE3 T_e_f = last_event_.T_w_c.inverse() * *T_w_f;
-  logf(LogLevel::kDebug,
-       "refused frame %.3f: %d residuals, rmse %.4f, %.2f ms from the events' pose, "
-       "%.3f cm / %.3f deg from it",
-       toSeconds(t), tr.residuals, tr.rmse, 1e3 * toSeconds(t - last_event_.t),
-       100 * T_e_f.translation().norm(), T_e_f.so3().angle() * 180 / M_PI);
-  if (tr.residuals < q.refused_min_residuals * odo_->lastResiduals() ||
-      T_e_f.translation().norm() > q.refused_max_shift * events_->referenceMedianDepth() ||
-      T_e_f.so3().angle() > q.refused_max_turn_deg * M_PI / 180.0)
-    return false;
-  odo_->setLast(*T_w_f);
   res_.frames.push_back({t, *T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * *T_w_f});
   frame_ok_.push_back(1);
-  events_->correct(t, *T_w_f);
-  ++res_.tracked;
+  if (cfg_.use_events) events_->correct(t, *T_w_f);
   ++res_.frames_tracked_only;
   last_good_t_ = t;
   inputs_without_pose_ = 0;
