@@ -26,12 +26,12 @@ Undistorter::Undistorter(const CameraModel& raw) : raw_(raw), pinhole_(raw) {
   }
 }
 
-cv::Mat Undistorter::undistortImage(const cv::Mat& raw_image) const {
+cv::Mat Undistorter::undistortImage(const cv::Mat& raw_image, double border) const {
   if (raw_image.cols != raw_.width || raw_image.rows != raw_.height)
     throw std::invalid_argument("Undistorter: image size differs from the calibration");
   if (raw_.distortion == Distortion::kNone) return raw_image.clone();
   cv::Mat out;
-  cv::remap(raw_image, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::remap(raw_image, out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(border));
   return out;
 }
 

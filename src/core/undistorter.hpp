@@ -21,8 +21,10 @@ class Undistorter {
   const cv::Point2f& eventLut(int x, int y) const { return lut_[y * raw_.width + x]; }
   const std::vector<cv::Point2f>& eventLut() const { return lut_; }
 
-  // Undistorts an image (bilinear); 8-bit or float, any channel count.
-  cv::Mat undistortImage(const cv::Mat& raw_image) const;
+  // Undistorts an image (bilinear); 8-bit or float, any channel count. Pixels whose ray falls outside
+  // the raw image (pincushion distortion) take `border` (NaN for a float image whose NaNs mark pixels
+  // without information).
+  cv::Mat undistortImage(const cv::Mat& raw_image, double border = 0) const;
   const cv::Mat& mapX() const { return map_x_; }
   const cv::Mat& mapY() const { return map_y_; }
 

@@ -128,7 +128,8 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
 
 std::optional<SE3> FrameFrontend::trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior) {
   adoptReference(false);
-  if (!has_ref_ || !has_last_) return std::nullopt;
+  // No usable frame aligned since the map (or its relocalization) began: nothing to compare with.
+  if (!has_ref_ || !has_last_ || last_residuals_ == 0) return std::nullopt;
   SE3 T_w_start = last_T_w_f_;
   if (prior)
     T_w_start = *prior;
@@ -178,7 +179,7 @@ std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& fo
   found = std::to_string(r.inliers) + " of " + std::to_string(r.matches) + " feature matches with keyframe " +
           std::to_string(ref_id_) + ", aligned to rmse " + std::to_string(tr.rmse);
   alpha_ = alpha, beta_ = beta;
-  last_rmse_ = tr.rmse;
+  last_rmse_ = tr.rmse, last_residuals_ = tr.residuals;
   has_last_ = has_prev_ = false;  // at rest: the velocity before the loss means nothing now
   setLast(T_w_kf_ * T_f_kf.inverse());
   return last_T_w_f_;

@@ -38,7 +38,7 @@ class FrameFrontend {
   // with normalizeRefusedFrame), aligned from `prior` (the events' pose) or else the constant-velocity
   // prediction, with brightness (α, β) from (1, 0). Its pose when the alignment succeeded on enough
   // residuals and landed within the frame_quality bounds of its start (it then becomes the last pose),
-  // else nullopt and nothing changes.
+  // else nullopt. Either way a reference the back-end published meanwhile is taken up.
   std::optional<SE3> trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior);
   // The frame's pose with no starting point (features against the newest reference, then the direct
   // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when

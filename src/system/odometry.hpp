@@ -92,7 +92,8 @@ struct OdometryConfig {
   // The bootstrap's alignments (bootstrap.tracker) keep min_step 0: their short baselines make the
   // first map sensitive to the last tiny steps.
   FrameTrackerConfig frame_tracker{.levels = 4, .max_iterations = 20, .max_rmse = 0.1, .min_step = 1e-5};
-  int prior_levels = 2;  // pyramid levels of the frame alignment when the event pose seeds it
+  // Pyramid levels of the frame alignment when the event pose seeds it, and of a refused frame's.
+  int prior_levels = 2;
   // Events mode: the frame alignment always starts from the frames' own constant-velocity prediction
   // too and keeps the lower residual (off: only when the event-seeded one is 15 % worse than usual).
   // The two starts end in different minima along the direction one frame resolves least; ESIM rotation

@@ -77,13 +77,16 @@ void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
 // it gives anchors the events' (which otherwise drift until the next usable frame), or bridges the gap
 // a frames-only run would lose its track over. It never becomes a keyframe.
 bool OdometryCore::trackRefused(TimeNs t, const cv::Mat& raw) {
-  if (!cfg_.frame_quality.track_refused || !initialized_ || lost_) return false;
+  // Past the gap that makes a loss, the last pose is no start (the next usable frame relocalizes).
+  if (!cfg_.frame_quality.track_refused || !initialized_ || lost_ ||
+      t - last_good_t_ > fromSeconds(cfg_.recovery.gap_s))
+    return false;
   const cv::Mat norm = normalizeRefusedFrame(raw, quality_.referenceMean());
   if (norm.empty()) return false;
+  const cv::Mat img = und_.undistortImage(norm, std::numeric_limits<double>::quiet_NaN());
   const ScopedStage stage(&clock_, Stage::kFrameTracking);
   const bool event_prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
-  const std::optional<SE3> T_w_f =
-      odo_->trackRefused(t, und_.undistortImage(norm), event_prior ? &last_event_.T_w_c : nullptr);
+  const std::optional<SE3> T_w_f = odo_->trackRefused(t, img, event_prior ? &last_event_.T_w_c : nullptr);
   if (!T_w_f) return false;
   res_.frames.push_back({t, *T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * *T_w_f});
@@ -91,7 +94,7 @@ bool OdometryCore::trackRefused(TimeNs t, const cv::Mat& raw) {
   if (cfg_.use_events) events_->correct(t, *T_w_f);
   ++res_.frames_tracked_only;
   last_good_t_ = t;
-  inputs_without_pose_ = 0;
+  failed_in_row_ = inputs_without_pose_ = 0;
   return true;
 }
 

@@ -119,6 +119,32 @@ TEST(Undistorter, EventLutAndImageMapAreConsistent) {
   EXPECT_NEAR(my, expect.y(), 1e-3);
 }
 
+// Pincushion distortion: the undistorted grid's corners look beyond the raw image. There a chosen
+// border value (0 by default, NaN for an image whose NaNs mark pixels without information); inside,
+// the raw image's values.
+TEST(Undistorter, BorderValueFillsWhatTheRawImageDoesNotSee) {
+  CameraModel cam = sliderLikeCamera();
+  cam.k = {0.3, 0, 0, 0, 0};
+  const Undistorter und(cam);
+  const cv::Mat raw(cam.height, cam.width, CV_32F, cv::Scalar(0.5));
+  const cv::Mat zero = und.undistortImage(raw), nan = und.undistortImage(raw, std::nan(""));
+  int outside = 0, inside = 0;
+  for (int y = 0; y < raw.rows; ++y)
+    for (int x = 0; x < raw.cols; ++x) {
+      const float mx = und.mapX().at<float>(y, x), my = und.mapY().at<float>(y, x);
+      if (mx < -1 || my < -1 || mx > raw.cols || my > raw.rows) {
+        ++outside;
+        EXPECT_EQ(zero.at<float>(y, x), 0.f);
+        EXPECT_TRUE(std::isnan(nan.at<float>(y, x)));
+      } else if (mx >= 1 && my >= 1 && mx <= raw.cols - 2 && my <= raw.rows - 2) {
+        ++inside;
+        EXPECT_FLOAT_EQ(nan.at<float>(y, x), 0.5f);
+      }
+    }
+  EXPECT_GT(outside, 100);
+  EXPECT_GT(inside, raw.rows * raw.cols / 2);
+}
+
 TEST(Camera, ValidateRejectsNaN) {
   CameraModel cam = sliderLikeCamera();
   cam.k[1] = std::nan("");
