@@ -140,10 +140,10 @@ class Odometry::Impl {
         const bool events_past = !cfg_.use_events || producer_.nextPacketStartsAtOrAfter(frames_.front().t);
         if (!(at_end || events_past)) {
           if (frames_.size() <= static_cast<std::size_t>(cfg_.stream.max_pending_frames)) return;
-          if (!producer_.idle()) {
-            producer_.drain(efs_);
-            continue;
-          }
+          // What the producer builds or has built since the take above goes first where it is earlier
+          // (asking idle() alone raced with a packet finished in between).
+          producer_.drain(efs_);
+          if (!efs_.empty()) continue;
         }
         processFrame();
       } else {
