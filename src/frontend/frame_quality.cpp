@@ -77,9 +77,9 @@ std::string FrameQualityGate::absoluteProblem(const FrameStats& s) const {
 
 std::string FrameQualityGate::relativeProblem(const FrameStats& s) const {
   if (accepted_.empty()) return {};
-  std::vector<double> means, textures;
-  for (const FrameStats& a : accepted_) means.push_back(a.mean), textures.push_back(a.texture);
-  const double ref_mean = median(means), ref_texture = median(textures);
+  std::vector<double> textures;
+  for (const FrameStats& a : accepted_) textures.push_back(a.texture);
+  const double ref_mean = referenceMean(), ref_texture = median(textures);
   if (s.texture < cfg_.min_texture_ratio * ref_texture)
     return describe("low contrast or blurred (texture %.2f of the recent frames')", s.texture / ref_texture);
   const double ratio = (s.mean + 1.0) / (ref_mean + 1.0);

@@ -25,9 +25,9 @@ struct FrameQualityConfig {
   // A refused frame still gives a pose, never a keyframe or map point: its clipped pixels left out and
   // its brightness scaled to the recent frames', it is aligned from the events' pose (without events,
   // the constant-velocity prediction) and kept when it lands within these bounds of that start
-  // (translation as a fraction of the reference keyframe's median depth) on at
-  // least this fraction of the residuals the last usable frame had (a frame blown out but for a few
-  // dark spots does not hold the pose).
+  // (translation as a fraction of the reference keyframe's median depth) on at least this fraction of
+  // the residuals the last usable frame had (a frame blown out but for a few dark spots does not hold
+  // the pose).
   bool track_refused = true;
   double refused_max_shift = 0.02;
   double refused_max_turn_deg = 2.0;

@@ -130,11 +130,7 @@ std::optional<SE3> FrameFrontend::trackRefused(TimeNs t, const cv::Mat& img, con
   adoptReference(false);
   // No usable frame aligned since the map (or its relocalization) began: nothing to compare with.
   if (!has_ref_ || !has_last_ || last_residuals_ == 0) return std::nullopt;
-  SE3 T_w_start = last_T_w_f_;
-  if (prior)
-    T_w_start = *prior;
-  else if (has_prev_)
-    T_w_start = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+  const SE3 T_w_start = prior ? *prior : constantVelocityPose();
   SE3 T_f_kf = T_w_start.inverse() * T_w_kf_;
   double alpha = 1, beta = 0;
   const FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta, cfg_.prior_levels);
@@ -183,6 +179,10 @@ std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& fo
   has_last_ = has_prev_ = false;  // at rest: the velocity before the loss means nothing now
   setLast(T_w_kf_ * T_f_kf.inverse());
   return last_T_w_f_;
+}
+
+SE3 FrameFrontend::constantVelocityPose() const {
+  return has_prev_ ? last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_) : last_T_w_f_;
 }
 
 void FrameFrontend::setLast(const SE3& T_w_f) {
@@ -256,8 +256,7 @@ bool FrameFrontend::keyframeDueBeforeNextFrame(const SE3& T_f_kf) const {
 // prediction, trying DSO's other starting points when that fails.
 FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha,
                                       double& beta) {
-  SE3 T_w_cv = last_T_w_f_;
-  if (has_prev_) T_w_cv = last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_);
+  const SE3 T_w_cv = constantVelocityPose();
   const SE3 T_w_pred = prior ? *prior : T_w_cv;
   T_f_kf = T_w_pred.inverse() * T_w_kf_;
   alpha = alpha_, beta = beta_;

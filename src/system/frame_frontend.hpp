@@ -72,6 +72,8 @@ class FrameFrontend {
 
  private:
   bool keyframeDueBeforeNextFrame(const SE3& T_f_kf) const;
+  // The next frame's pose if the last two frames' motion goes on (the last pose with only one).
+  SE3 constantVelocityPose() const;
   bool wantKeyframe(const Flow& fl, double alpha) const;
   FrameTrackResult align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha, double& beta);
 
