@@ -75,10 +75,14 @@ SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new,
   return T_w_kf_;
 }
 
-SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
+void FrameFrontend::awaitPendingKeyframe() {
   const bool wait = !has_ref_ || (pending_.active && cfg_.wait_for_keyframe);
   if (wait && cfg_.threaded_backend && worker_.busy()) ++res_.backend_waits;
   adoptReference(wait);
+}
+
+SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
+  awaitPendingKeyframe();
   const auto t0 = Clock::now();
   SE3 T_f_kf;
   double alpha = 1, beta = 0;
@@ -127,7 +131,6 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
 }
 
 std::optional<SE3> FrameFrontend::trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior) {
-  adoptReference(false);
   // No usable frame aligned since the map (or its relocalization) began: nothing to compare with.
   if (!has_ref_ || !has_last_ || last_residuals_ == 0) return std::nullopt;
   const SE3 T_w_start = prior ? *prior : constantVelocityPose();

@@ -38,8 +38,11 @@ class FrameFrontend {
   // with normalizeRefusedFrame), aligned from `prior` (the events' pose) or else the constant-velocity
   // prediction, with brightness (α, β) from (1, 0). Its pose when the alignment succeeded on enough
   // residuals and landed within the frame_quality bounds of its start (it then becomes the last pose),
-  // else nullopt. Either way a reference the back-end published meanwhile is taken up.
+  // else nullopt. The caller has called awaitPendingKeyframe() for the frame.
   std::optional<SE3> trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior);
+  // What every frame does first, usable or not: takes up the reference the back-end published, and
+  // waits for it when a keyframe is pending (wait_for_keyframe) or there is none yet.
+  void awaitPendingKeyframe();
   // The frame's pose with no starting point (features against the newest reference, then the direct
   // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when
   // neither finds the frame. `found` says how (matches and inliers), or why not.

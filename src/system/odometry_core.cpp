@@ -55,6 +55,12 @@ void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
   const ScopedStage stage(&clock_, Stage::kFramePreparation);
   if (std::string why = quality_.check(t, raw); !why.empty()) {
     ++res_.frames_rejected;
+    if (initialized_ && !lost_) {
+      // As after any frame: the keyframe being mapped is waited for, so that the events, which carry
+      // the pose until the next usable frame, track against it mapped and not against its frame.
+      odo_->awaitPendingKeyframe();
+      syncReference();
+    }
     if (trackRefused(t, raw)) {
       res_.failures.push_back({t, "frame kept out of the map: " + why + "; its pose tracked"});
       return;
