@@ -163,6 +163,9 @@ void addRunCommand(CLI::App& app) {
   param("--frame-rate", c.frame_rate, "frame_rate", "Keep the frames nearest this rate, Hz (0: all)");
   param("--start", c.start_s, "start_s", "Seconds to skip from the first frame");
   param("--duration", c.duration_s, "duration_s", "Seconds to process (0: to the end)");
+  param("--exposure", c.deblur.exposure_s, "deblur.exposure_s",
+        "The frames' exposure time, s, stamped at its middle: keyframes are deblurred with the events "
+        "of their exposure for the event tracker (0: unknown, off)");
   // Defaults that depend on the sensor's size (defaultOdometryConfig) say so instead of one number.
   const auto sized = [&](const std::string& name, auto& field, const std::string& key,
                          const std::string& help, const std::string& defaults) {

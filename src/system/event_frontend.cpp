@@ -28,6 +28,14 @@ void addPoints(Keyframe& kf, std::vector<cv::Point2f>& uv, std::vector<double>& 
   }
 }
 
+double medianDepth(const std::vector<KeyframePoint>& points) {
+  std::vector<double> z;
+  z.reserve(points.size());
+  for (const KeyframePoint& p : points) z.push_back(1.0 / p.inv_depth);
+  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+  return z[z.size() / 2];
+}
+
 // The reference's image (and its gradients) at pose T_w_kf, without points.
 Keyframe imageOf(const Keyframe& ref, const SE3& T_w_kf) {
   Keyframe kf;
@@ -73,7 +81,7 @@ void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
   if (provisional_t_ >= 0 && ref.t < provisional_t_) return;  // older than the frame tracked against
   Keyframe kf = imageOf(ref, T_w_kf);
   addFilledPoints(kf, ref.points);
-  adopt(std::move(kf), T_w_kf);
+  if (adopt(std::move(kf), T_w_kf)) ref_source_ = ref.points;
 }
 
 void EventFrontend::setProvisionalReference(int id, TimeNs t, const cv::Mat& img, const SE3& T_w_f,
@@ -84,7 +92,21 @@ void EventFrontend::setProvisionalReference(int id, TimeNs t, const cv::Mat& img
   kf.T_w_kf = T_w_f;
   setKeyframeImage(kf, img);
   addFilledPoints(kf, points);
-  adopt(std::move(kf), T_w_f, true);
+  if (adopt(std::move(kf), T_w_f, true)) ref_source_ = points;
+}
+
+void EventFrontend::sharpenReference(TimeNs t, const cv::Mat& img) {
+  if (!has_ref_ || ref_.t != t || ref_source_.empty()) return;
+  Keyframe kf;
+  kf.id = ref_.id;
+  kf.t = ref_.t;
+  kf.T_w_kf = ref_.T_w_kf;
+  setKeyframeImage(kf, img);
+  addFilledPoints(kf, ref_source_);
+  if (kf.points.size() < 50) return;
+  median_depth_ = medianDepth(kf.points);
+  ref_ = std::move(kf);
+  tracker_.setKeyframe(ref_);
 }
 
 void EventFrontend::addFilledPoints(Keyframe& kf, const std::vector<KeyframePoint>& points) const {
@@ -116,16 +138,12 @@ void EventFrontend::setDenseReference(const Keyframe& ref, const SE3& T_w_kf) {
   for (const KeyframePoint& p : ref.points)
     if (p.inv_depth > 0) uv.emplace_back(p.u, p.v), depth.push_back(p.inv_depth);
   addPoints(kf, uv, depth, cfg_.depth_median_px);
-  adopt(std::move(kf), T_w_kf);
+  if (adopt(std::move(kf), T_w_kf)) ref_source_.clear();  // its points are not filled: no sharpening
 }
 
-void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
-  if (kf.points.size() < 50) return;  // keep the previous reference: this one cannot be tracked against
-  std::vector<double> z;
-  z.reserve(kf.points.size());
-  for (const KeyframePoint& p : kf.points) z.push_back(1.0 / p.inv_depth);
-  std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
-  median_depth_ = z[z.size() / 2];
+bool EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
+  if (kf.points.size() < 50) return false;  // keep the previous reference: it cannot be tracked against
+  median_depth_ = medianDepth(kf.points);
   // The current estimate and the velocity, moved to the new keyframe.
   if (has_ref_) {
     // A keyframe made from a corrected frame comes back from the bundle adjustment in a moved world
@@ -152,6 +170,7 @@ void EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   t_prev_ = -1;
   has_ref_ = true;
   recent_n_ = 0;
+  return true;
 }
 
 std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, std::string* failure) {

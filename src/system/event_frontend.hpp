@@ -75,6 +75,10 @@ class EventFrontend {
   // the back-end publishes that keyframe. A reference older than t is not taken meanwhile.
   void setProvisionalReference(int id, TimeNs t, const cv::Mat& img, const SE3& T_w_f,
                                const std::vector<KeyframePoint>& points);
+  // The reference's image replaced by a sharper one of the same view (its frame deblurred with the
+  // events of its exposure): the points are selected and filled again on it, the estimate stays. Only
+  // for the reference at time t made by setReference or setProvisionalReference.
+  void sharpenReference(TimeNs t, const cv::Mat& img);
   bool hasReference() const { return has_ref_; }
   // The reference as tracked: its image, and its points with their (filtered) inverse depths.
   const Keyframe& reference() const { return ref_; }
@@ -121,6 +125,7 @@ class EventFrontend {
   EventTracker tracker_;
   bool has_ref_ = false;
   Keyframe ref_;
+  std::vector<KeyframePoint> ref_source_;  // the points the reference's were filled from
   int ref_id_ = -1;
   SE3 T_w_kf_;
   TimeNs provisional_t_ = -1;  // time of the provisional reference's frame; -1: none
@@ -138,7 +143,8 @@ class EventFrontend {
   // The last two frames' poses (world), for the motion prior.
   TimeNs t_f0_ = -1, t_f1_ = -1;
   SE3 T_w_f0_, T_w_f1_;
-  void adopt(Keyframe kf, const SE3& T_w_kf, bool provisional = false);
+  // False (the previous reference kept) when kf has too few points to be tracked against.
+  bool adopt(Keyframe kf, const SE3& T_w_kf, bool provisional = false);
   // The points (keyframe pixels with inverse depth) and the keyframe's selected pixels next to them.
   void addFilledPoints(Keyframe& kf, const std::vector<KeyframePoint>& points) const;
   // The move of the world estimate that puts the corrected frame at t_kf onto its keyframe's pose

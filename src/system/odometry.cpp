@@ -9,11 +9,13 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
 #include "system/event_frame_producer.hpp"
+#include "system/exposure_events.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/odometry_core.hpp"
 #include "system/run_stats.hpp"
@@ -39,7 +41,10 @@ class Odometry::Impl {
         listener_(listener),
         core_(camera, cfg_, res_, clock_),
         producer_(core_.undistorter(), cfg_.event_frame, cfg_.flicker_filter,
-                  cfg_.use_events && cfg_.stream.event_thread, &clock_) {}
+                  cfg_.use_events && cfg_.stream.event_thread, &clock_) {
+    if (cfg_.use_events && cfg_.deblur.exposure_s > 0)
+      exposures_.emplace(fromSeconds(cfg_.deblur.exposure_s));
+  }
 
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
     const ScopedStage api(&clock_, Stage::kUnaccounted);
@@ -63,6 +68,7 @@ class Odometry::Impl {
     }
     checked_t_ = prev;
     events_in_ += end - begin;
+    if (exposures_) exposures_->addEvents(ev, begin, end);
     intake.reset();
     producer_.add(ev, begin, end, [this] { dispatch(false); });
   }
@@ -84,6 +90,7 @@ class Odometry::Impl {
     {
       const ScopedStage prep(&clock_, Stage::kFramePreparation);
       frames_.push_back({t, gray8.clone()});
+      if (exposures_) exposures_->addFrame(t, frames_.back().image);
     }
     dispatch(false);
   }
@@ -94,6 +101,7 @@ class Odometry::Impl {
     finished_ = true;
     producer_.finish();
     dispatch(true);
+    endExposures(std::numeric_limits<TimeNs>::max());
     core_.finish();
     res_.events_flicker_dropped = producer_.flickerDropped();
     res_.event_thread = producer_.threaded();
@@ -164,9 +172,18 @@ class Odometry::Impl {
     }
   }
 
+  // Exposures that ended before the next item in the merged order (of frames already processed).
+  void endExposures(TimeNs up_to) {
+    if (!exposures_) return;
+    exposures_->endExposures(up_to, last_frame_done_,
+                             [this](TimeNs t, const cv::Mat& raw, const EventArray& ev, std::size_t b,
+                                    std::size_t e) { core_.exposureEnded(t, raw, ev, b, e); });
+  }
+
   void processFrame() {
     const PendingFrame f = std::move(frames_.front());
     frames_.pop_front();
+    endExposures(f.t);
     if (!has_first_) has_first_ = true, res_.first_t = f.t;
     last_frame_done_ = f.t;
     core_.frame(f.t, f.image);
@@ -176,6 +193,7 @@ class Odometry::Impl {
   void processEventFrame() {
     EventFrame ef = std::move(efs_.front());
     efs_.pop_front();
+    endExposures(ef.t);
     // Before the first frame: nothing to track against yet (a recording's events before its frames).
     if (has_first_ && ef.t >= res_.first_t) {
       if (ef.t < last_frame_done_) {
@@ -223,6 +241,7 @@ class Odometry::Impl {
   // they do not depend on the chunk size).
   TimeNs checked_t_ = std::numeric_limits<TimeNs>::min();
   std::deque<PendingFrame> frames_;
+  std::optional<ExposureEvents> exposures_;  // with the frames' exposure known (deblurring)
   std::deque<EventFrame> efs_;
   bool has_frame_in_ = false, has_first_ = false, finished_ = false;
   TimeNs last_frame_in_ = 0, last_frame_done_ = std::numeric_limits<TimeNs>::min();

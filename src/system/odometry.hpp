@@ -18,6 +18,7 @@
 #include "backend/sliding_window.hpp"
 #include "core/reflect.hpp"
 #include "frontend/event_frame.hpp"
+#include "frontend/exposure_deblur.hpp"
 #include "frontend/flicker_filter.hpp"
 #include "frontend/frame_quality.hpp"
 #include "frontend/frame_tracker.hpp"
@@ -88,6 +89,9 @@ EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, reloca
 struct OdometryConfig {
   StreamConfig stream;
   FrameQualityConfig frame_quality;
+  // The frames' exposure, when known: a keyframe's image is deblurred with the events of its exposure
+  // for the event tracker (off by default: exposure_s 0).
+  ExposureDeblurConfig deblur;
   BootstrapConfig bootstrap;
   // The bootstrap's alignments (bootstrap.tracker) keep min_step 0: their short baselines make the
   // first map sensitive to the last tiny steps.
@@ -139,7 +143,7 @@ struct OdometryConfig {
   double duration_s = 0;  // 0: to the end
 };
 
-EDS_FIELDS(OdometryConfig, stream, frame_quality, bootstrap, frame_tracker, prior_levels,
+EDS_FIELDS(OdometryConfig, stream, frame_quality, deblur, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, frame_cv_min_distance, mapping, backend, policy, threaded_backend,
            wait_for_keyframe, use_events, flicker_filter, event_frame, events, buffered_gate_translation,
            buffered_gate_rotation_deg, buffered_max_mb, event_smoothing_s, event_anchor_max_interval_s,

@@ -8,6 +8,7 @@ namespace eds {
 
 void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera) {
   cfg.event_frame.validate();
+  cfg.deblur.validate();
   if (camera.width <= 0 || camera.height <= 0)
     throw std::invalid_argument("Odometry: the camera's sensor size is unknown");
   if (!(cfg.stream.max_frame_wait_s >= 0) || cfg.stream.max_pending_frames < 0)

@@ -7,6 +7,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "frontend/exposure_deblur.hpp"
 #include "system/run_stats.hpp"
 #include "system/trajectory_smoothing.hpp"
 
@@ -418,6 +419,20 @@ void OdometryCore::syncReference() {
   if (!cfg_.use_events || odo_->referenceId() == event_ref_id_ || odo_->reference().points.empty()) return;
   events_->setReference(odo_->reference(), odo_->T_w_kf());
   event_ref_id_ = odo_->referenceId();
+  // Published after its exposure ended (threaded back-end): the image deblurred meanwhile is kept.
+  if (sharp_.t == odo_->reference().t) events_->sharpenReference(sharp_.t, sharp_.image);
+}
+
+void OdometryCore::exposureEnded(TimeNs t, const cv::Mat& raw, const EventArray& events, std::size_t begin,
+                                 std::size_t end) {
+  if (!cfg_.use_events || !initialized_ || lost_ || !events_->hasReference() || events_->reference().t != t)
+    return;
+  const ScopedStage stage(&clock_, Stage::kFramePreparation);
+  const cv::Mat sharp8 =
+      deblurFrame(raw, events, begin, end, t, fromSeconds(cfg_.deblur.exposure_s), cfg_.deblur.contrast);
+  und_.undistortImage(sharp8).convertTo(sharp_.image, CV_32F, 1.0 / 255.0);
+  sharp_.t = t;
+  events_->sharpenReference(t, sharp_.image);
 }
 
 // `bracket`: the frames before and after a buffered event frame (its start and motion prior).

@@ -20,6 +20,11 @@
 
 namespace eds {
 
+struct StampedImage {
+  TimeNs t = -1;
+  cv::Mat image;
+};
+
 class OdometryCore {
  public:
   OdometryCore(const CameraModel& camera, const OdometryConfig& cfg, OdometryResult& res, StageClock& clock);
@@ -27,6 +32,10 @@ class OdometryCore {
   // A raw 8-bit frame.
   void frame(TimeNs t, const cv::Mat& raw);
   void eventFrame(const EventFrame& ef);
+  // The exposure of the raw frame at time t has ended; events[begin, end) are those of the exposure.
+  // When that frame is the event tracker's reference, its image is deblurred with them.
+  void exposureEnded(TimeNs t, const cv::Mat& raw, const EventArray& events, std::size_t begin,
+                     std::size_t end);
   // After the last input: finishes the current segment's back-end and fills the result's keyframes,
   // map, refined trajectories and back-end figures from every segment.
   void finish();
@@ -66,6 +75,7 @@ class OdometryCore {
   std::unique_ptr<EventFrontend> events_;
   bool initialized_ = false;  // the current segment's map exists
   int event_ref_id_ = -1;
+  StampedImage sharp_;  // the last keyframe image deblurred for the event tracker (undistorted, float)
   std::vector<EventFrame> buffered_;
   TimeNs buffered_min_dt_ = 0;                // spacing of the buffered event frames once they were thinned
   std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference

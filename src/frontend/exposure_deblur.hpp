@@ -1,0 +1,35 @@
+#pragma once
+// A motion-blurred frame made sharp with the events of its exposure (the event-based double integral of
+// Pan et al., CVPR 2019). Under the event generation model a pixel's brightness at time s of the
+// exposure [t - T/2, t + T/2] is L(s) = L(t) exp(C (E(s) - E(t))), E being its signed event count, and
+// the frame is the mean of L over the exposure, so L(t) = B / mean_s exp(C (E(s) - E(t))). The event
+// tracker takes its gradients from the keyframe's image: blurred, it predicts the events of an edge
+// spread along the motion, where the sensor fires them at the sharp edge.
+#include <cstddef>
+#include <opencv2/core.hpp>
+
+#include "core/events.hpp"
+#include "core/reflect.hpp"
+#include "core/time.hpp"
+
+namespace eds {
+
+struct ExposureDeblurConfig {
+  // The frames' exposure time in seconds, their time stamps at its middle; 0: unknown, no deblurring.
+  double exposure_s = 0;
+  // The log-intensity change of one event (the sensor's contrast threshold).
+  double contrast = 0.2;
+  // Throws std::invalid_argument naming the bad field.
+  void validate() const;
+};
+
+EDS_FIELDS(ExposureDeblurConfig, exposure_s, contrast)
+
+// The sharp image at time t of the 8-bit frame `gray8` (raw sensor pixels) exposed over
+// [t - exposure/2, t + exposure/2), from the events [begin, end) of `events` (time-ordered; those
+// outside the exposure or the sensor are ignored). 8-bit, the frame's size; pixels without events keep
+// their value.
+cv::Mat deblurFrame(const cv::Mat& gray8, const EventArray& events, std::size_t begin, std::size_t end,
+                    TimeNs t, TimeNs exposure, double contrast);
+
+}  // namespace eds

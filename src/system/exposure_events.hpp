@@ -1,0 +1,48 @@
+#pragma once
+// The events of each frame's exposure, kept until the exposure has ended, so that the frame's image can
+// be deblurred with them (frontend/exposure_deblur.hpp). The stream merge hands each exposure on at the
+// same point of the merged order whatever the chunks the events came in: once the frame has been
+// processed and before the first item later than the exposure's end.
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <opencv2/core.hpp>
+
+#include "core/events.hpp"
+#include "core/time.hpp"
+
+namespace eds {
+
+class ExposureEvents {
+ public:
+  // What an ended exposure gives: the frame's time and 8-bit image, and the events that were kept
+  // (events[begin, end) spans the exposure).
+  using Handler = std::function<void(TimeNs t, const cv::Mat& gray8, const EventArray& events,
+                                     std::size_t begin, std::size_t end)>;
+
+  explicit ExposureEvents(TimeNs exposure);
+  // Checked events, in time order.
+  void addEvents(const EventArray& ev, std::size_t begin, std::size_t end);
+  void addFrame(TimeNs t, const cv::Mat& gray8);
+  // Hands on, oldest first, every frame whose exposure ended at or before `up_to` and whose time is
+  // not after `processed` (the frame itself went first), then forgets it. A frame whose exposure began
+  // before the oldest event kept (it came more than an exposure late) is dropped unhandled.
+  void endExposures(TimeNs up_to, TimeNs processed, const Handler& handle);
+
+ private:
+  struct Frame {
+    TimeNs t;
+    cv::Mat gray8;
+  };
+  void trim();
+
+  TimeNs exposure_;
+  EventArray ev_;
+  std::size_t first_ = 0;  // ev_[first_...] are kept; the rest wait to be erased in one go
+  TimeNs newest_ = 0;
+  bool any_ = false;
+  TimeNs kept_from_ = 0;  // no event before this time was dropped
+  std::deque<Frame> frames_;
+};
+
+}  // namespace eds
