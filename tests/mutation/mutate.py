@@ -49,7 +49,9 @@ def run_mutation(m, build, timeout):
         for mod in m["modules"]:
             exe = pathlib.Path(build) / "tests" / f"eds_test_{mod}"
             try:
-                r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=timeout)
+                # The first failing test is enough to kill a mutation; the rest would only cost time.
+                r = subprocess.run([str(exe), "--gtest_fail_fast"], capture_output=True, text=True,
+                                   timeout=timeout)
             except subprocess.TimeoutExpired:
                 return "killed", f"{mod}: timeout ({timeout} s)", time.monotonic() - t0
             if r.returncode != 0:
