@@ -165,7 +165,8 @@ void addRunCommand(CLI::App& app) {
   param("--duration", c.duration_s, "duration_s", "Seconds to process (0: to the end)");
   param("--exposure", c.deblur.exposure_s, "deblur.exposure_s",
         "The frames' exposure time, s, stamped at its middle: keyframes are deblurred with the events "
-        "of their exposure for the event tracker (0: unknown, off)");
+        "of their exposure for the event tracker (0: unknown, estimated from the first frames with "
+        "motion and their events; --set deblur.estimate=false: no deblurring)");
   // Defaults that depend on the sensor's size (defaultOdometryConfig) say so instead of one number.
   const auto sized = [&](const std::string& name, auto& field, const std::string& key,
                          const std::string& help, const std::string& defaults) {

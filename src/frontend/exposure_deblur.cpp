@@ -12,6 +12,9 @@ void ExposureDeblurConfig::validate() const {
   if (!(exposure_s >= 0 && exposure_s <= 1))
     throw std::invalid_argument("deblur: exposure_s must be in [0, 1] s (0: off), got " +
                                 std::to_string(exposure_s));
+  if (!(min_exposure_s >= 0 && min_exposure_s <= 1))
+    throw std::invalid_argument("deblur: min_exposure_s must be in [0, 1] s, got " +
+                                std::to_string(min_exposure_s));
   if (!(contrast > 0 && contrast <= 2))
     throw std::invalid_argument("deblur: contrast must be in (0, 2], got " + std::to_string(contrast));
 }

@@ -15,15 +15,22 @@
 namespace eds {
 
 struct ExposureDeblurConfig {
-  // The frames' exposure time in seconds, their time stamps at its middle; 0: unknown, no deblurring.
+  // The frames' exposure time in seconds, their time stamps at its middle; 0: unknown, estimated from
+  // the first frames and their events when `estimate` (frontend/exposure_estimate.hpp) and the sensor
+  // is at most a DAVIS346's size (a larger one keeps too many events meanwhile; a rig of an event
+  // camera and a frame camera knows the frames' exposure), else none.
   double exposure_s = 0;
+  bool estimate = true;
+  // An exposure shorter than this (given or estimated) blurs too little to be worth deblurring; the
+  // estimate on an ideal sensor's instantaneous frames is 5 ms (the events' quantization).
+  double min_exposure_s = 0.006;
   // The log-intensity change of one event (the sensor's contrast threshold).
   double contrast = 0.2;
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
 };
 
-EDS_FIELDS(ExposureDeblurConfig, exposure_s, contrast)
+EDS_FIELDS(ExposureDeblurConfig, exposure_s, estimate, min_exposure_s, contrast)
 
 // The sharp image at time t of the 8-bit frame `gray8` (raw sensor pixels) exposed over
 // [t - exposure/2, t + exposure/2), from the events [begin, end) of `events` (time-ordered; those

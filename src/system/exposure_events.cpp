@@ -11,6 +11,11 @@ ExposureEvents::ExposureEvents(TimeNs exposure)
   if (exposure <= 0) throw std::invalid_argument("ExposureEvents: the exposure must be > 0");
 }
 
+void ExposureEvents::setExposure(TimeNs exposure) {
+  if (exposure <= 0) throw std::invalid_argument("ExposureEvents: the exposure must be > 0");
+  exposure_ = exposure;
+}
+
 void ExposureEvents::addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
   end = std::min(end, ev.size());
   if (begin >= end) return;

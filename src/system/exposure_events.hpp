@@ -21,6 +21,9 @@ class ExposureEvents {
                                      std::size_t begin, std::size_t end)>;
 
   explicit ExposureEvents(TimeNs exposure);
+  TimeNs exposure() const { return exposure_; }
+  // From now on (an estimate replacing the longest exposure assumed until it came).
+  void setExposure(TimeNs exposure);
   // Checked events, in time order.
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end);
   void addFrame(TimeNs t, const cv::Mat& gray8);

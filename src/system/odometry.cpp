@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
+#include "frontend/exposure_estimate.hpp"
 #include "system/event_frame_producer.hpp"
 #include "system/exposure_events.hpp"
 #include "system/odometry_config_io.hpp"
@@ -42,8 +43,18 @@ class Odometry::Impl {
         core_(camera, cfg_, res_, clock_),
         producer_(core_.undistorter(), cfg_.event_frame, cfg_.flicker_filter,
                   cfg_.use_events && cfg_.stream.event_thread, &clock_) {
-    if (cfg_.use_events && cfg_.deblur.exposure_s > 0)
+    if (cfg_.use_events && cfg_.deblur.exposure_s >= cfg_.deblur.min_exposure_s &&
+        cfg_.deblur.exposure_s > 0) {
       exposures_.emplace(fromSeconds(cfg_.deblur.exposure_s));
+      res_.exposure_s = cfg_.deblur.exposure_s;
+    } else if (const CameraModel& raw = core_.undistorter().raw();
+               cfg_.use_events && cfg_.deblur.exposure_s == 0 && cfg_.deblur.estimate &&
+               raw.width * raw.height <= ExposureEstimator::kMaxWidth * ExposureEstimator::kMaxHeight) {
+      estimator_.emplace(cv::Size(raw.width, raw.height), cfg_.deblur.contrast);
+      // Events are kept from the start as for the longest exposure, so that the frames after the
+      // estimate find theirs whatever the chunks they came in; the frames before it are not deblurred.
+      exposures_.emplace(fromSeconds(ExposureEstimator::kLongestExposureSeconds));
+    }
   }
 
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
@@ -69,6 +80,7 @@ class Odometry::Impl {
     checked_t_ = prev;
     events_in_ += end - begin;
     if (exposures_) exposures_->addEvents(ev, begin, end);
+    if (estimator_) estimator_->addEvents(ev, begin, end);
     intake.reset();
     producer_.add(ev, begin, end, [this] { dispatch(false); });
   }
@@ -175,9 +187,29 @@ class Odometry::Impl {
   // Exposures that ended before the next item in the merged order (of frames already processed).
   void endExposures(TimeNs up_to) {
     if (!exposures_) return;
-    exposures_->endExposures(up_to, last_frame_done_,
-                             [this](TimeNs t, const cv::Mat& raw, const EventArray& ev, std::size_t b,
-                                    std::size_t e) { core_.exposureEnded(t, raw, ev, b, e); });
+    exposures_->endExposures(
+        up_to, last_frame_done_,
+        [this](TimeNs t, const cv::Mat& raw, const EventArray& ev, std::size_t b, std::size_t e) {
+          if (!estimator_) core_.exposureEnded(t, exposures_->exposure(), raw, ev, b, e);
+        });
+  }
+
+  // Frames go to the exposure estimator until it has an estimate; the frames after it are deblurred
+  // with it (when it is long enough to blur).
+  void estimateExposure(const PendingFrame& f) {
+    const ScopedStage stage(&clock_, Stage::kFramePreparation);
+    estimator_->addFrame(f.t, f.image);
+    if (!estimator_->done()) return;
+    res_.exposure_estimated = true;
+    res_.exposure_pairs = estimator_->pairsScored();
+    const double T = estimator_->exposureSeconds();
+    if (T >= cfg_.deblur.min_exposure_s && T > 0) {
+      exposures_->setExposure(fromSeconds(T));
+      res_.exposure_s = T;
+    } else {
+      exposures_.reset();
+    }
+    estimator_.reset();
   }
 
   void processFrame() {
@@ -186,6 +218,7 @@ class Odometry::Impl {
     endExposures(f.t);
     if (!has_first_) has_first_ = true, res_.first_t = f.t;
     last_frame_done_ = f.t;
+    if (estimator_) estimateExposure(f);
     core_.frame(f.t, f.image);
     notify();
   }
@@ -241,7 +274,8 @@ class Odometry::Impl {
   // they do not depend on the chunk size).
   TimeNs checked_t_ = std::numeric_limits<TimeNs>::min();
   std::deque<PendingFrame> frames_;
-  std::optional<ExposureEvents> exposures_;  // with the frames' exposure known (deblurring)
+  std::optional<ExposureEvents> exposures_;     // with the frames' exposure known (deblurring)
+  std::optional<ExposureEstimator> estimator_;  // while the exposure is being estimated
   std::deque<EventFrame> efs_;
   bool has_frame_in_ = false, has_first_ = false, finished_ = false;
   TimeNs last_frame_in_ = 0, last_frame_done_ = std::numeric_limits<TimeNs>::min();

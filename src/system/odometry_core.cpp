@@ -423,13 +423,12 @@ void OdometryCore::syncReference() {
   if (sharp_.t == odo_->reference().t) events_->sharpenReference(sharp_.t, sharp_.image);
 }
 
-void OdometryCore::exposureEnded(TimeNs t, const cv::Mat& raw, const EventArray& events, std::size_t begin,
-                                 std::size_t end) {
+void OdometryCore::exposureEnded(TimeNs t, TimeNs exposure, const cv::Mat& raw, const EventArray& events,
+                                 std::size_t begin, std::size_t end) {
   if (!cfg_.use_events || !initialized_ || lost_ || !events_->hasReference() || events_->reference().t != t)
     return;
   const ScopedStage stage(&clock_, Stage::kFramePreparation);
-  const cv::Mat sharp8 =
-      deblurFrame(raw, events, begin, end, t, fromSeconds(cfg_.deblur.exposure_s), cfg_.deblur.contrast);
+  const cv::Mat sharp8 = deblurFrame(raw, events, begin, end, t, exposure, cfg_.deblur.contrast);
   und_.undistortImage(sharp8).convertTo(sharp_.image, CV_32F, 1.0 / 255.0);
   sharp_.t = t;
   events_->sharpenReference(t, sharp_.image);

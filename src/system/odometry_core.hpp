@@ -32,10 +32,10 @@ class OdometryCore {
   // A raw 8-bit frame.
   void frame(TimeNs t, const cv::Mat& raw);
   void eventFrame(const EventFrame& ef);
-  // The exposure of the raw frame at time t has ended; events[begin, end) are those of the exposure.
-  // When that frame is the event tracker's reference, its image is deblurred with them.
-  void exposureEnded(TimeNs t, const cv::Mat& raw, const EventArray& events, std::size_t begin,
-                     std::size_t end);
+  // The exposure (of that length) of the raw frame at time t has ended; events[begin, end) are those of
+  // the exposure. When that frame is the event tracker's reference, its image is deblurred with them.
+  void exposureEnded(TimeNs t, TimeNs exposure, const cv::Mat& raw, const EventArray& events,
+                     std::size_t begin, std::size_t end);
   // After the last input: finishes the current segment's back-end and fills the result's keyframes,
   // map, refined trajectories and back-end figures from every segment.
   void finish();

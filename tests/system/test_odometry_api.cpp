@@ -101,11 +101,13 @@ TEST(OdometryApi, EventChunksOf1And1000And100000GiveTheOutputsOfEdsRun) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
   const Sequence seq(dir);
   OdometryConfig cfg = syncConfig();
-  // With keyframes deblurred: when an exposure is handed on is part of the merged order too.
-  cfg.deblur.exposure_s = 0.02;
+  // The frames' exposure estimated (the default) and the keyframes deblurred with it: which frame pairs
+  // the estimate comes from, and when an exposure is handed on, are part of the merged order too.
   const auto out = test::tempDir("api_chunks");
   const OdometryResult ref = runOdometry(seq, cfg);
   ASSERT_TRUE(ref.initialized);
+  ASSERT_TRUE(ref.exposure_estimated);
+  ASSERT_GE(ref.exposure_s, cfg.deblur.min_exposure_s);
   ASSERT_GT(ref.events.size(), 400u);
   writeOdometryOutputs(out / "run", ref, cfg);
   const EventArray ev = allEvents(seq);
@@ -125,6 +127,7 @@ TEST(OdometryApi, EventChunksOf1And1000And100000GiveTheOutputsOfEdsRun) {
                              (fd.event_thread ? "" : "_one_thread");
     EXPECT_EQ(r.event_frames, ref.event_frames) << name;
     EXPECT_EQ(r.failures.size(), ref.failures.size()) << name;
+    EXPECT_EQ(r.exposure_s, ref.exposure_s) << name;
     writeOdometryOutputs(out / name, r, cfg);
     expectSameOutputs(out / "run", out / name);
   }
