@@ -98,6 +98,14 @@ TEST(ExposureEstimator, SharpFramesNeedNoDeblurring) {
   EXPECT_LT(est.exposureSeconds(), ExposureDeblurConfig{}.min_exposure_s);
 }
 
+// Frames exposed over their whole interval: every pair's minimum is at the longest exposure tried, which
+// bounds nothing (early frames of a camera starting to move look the same), so no pair is scored.
+TEST(ExposureEstimator, AnExposureAtTheLongestTriedIsNotTakenForAnEstimate) {
+  const ExposureEstimator est = estimate(record(kFramePeriod));
+  EXPECT_FALSE(est.done());
+  EXPECT_EQ(est.pairsScored(), 0);
+}
+
 TEST(ExposureEstimator, AStillCameraGivesNoEstimate) {
   ExposureEstimator est(cv::Size(kW, kH), kContrast);
   const cv::Mat frame(kH, kW, CV_8UC1, cv::Scalar(100));
