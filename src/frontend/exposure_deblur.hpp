@@ -21,9 +21,9 @@ struct ExposureDeblurConfig {
   // camera and a frame camera knows the frames' exposure), else none.
   double exposure_s = 0;
   bool estimate = true;
-  // An exposure shorter than this (given or estimated) blurs too little to be worth deblurring; the
-  // estimate on an ideal sensor's instantaneous frames is 5 ms (the events' quantization).
-  double min_exposure_s = 0.006;
+  // An estimated exposure shorter than this blurs too little at hand-held speeds to be worth deblurring,
+  // and the estimate runs a few ms long (5-15 ms on instantaneous frames).
+  double min_exposure_s = 0.02;
   // The log-intensity change of one event (the sensor's contrast threshold).
   double contrast = 0.2;
   // Throws std::invalid_argument naming the bad field.

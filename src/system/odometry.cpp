@@ -43,10 +43,10 @@ class Odometry::Impl {
         core_(camera, cfg_, res_, clock_),
         producer_(core_.undistorter(), cfg_.event_frame, cfg_.flicker_filter,
                   cfg_.use_events && cfg_.stream.event_thread, &clock_) {
-    if (cfg_.use_events && cfg_.deblur.exposure_s >= cfg_.deblur.min_exposure_s &&
-        cfg_.deblur.exposure_s > 0) {
+    if (cfg_.use_events && cfg_.deblur.exposure_s > 0) {
       exposures_.emplace(fromSeconds(cfg_.deblur.exposure_s));
       res_.exposure_s = cfg_.deblur.exposure_s;
+      res_.deblurred = true;
     } else if (const CameraModel& raw = core_.undistorter().raw();
                cfg_.use_events && cfg_.deblur.exposure_s == 0 && cfg_.deblur.estimate &&
                raw.width * raw.height <= ExposureEstimator::kMaxWidth * ExposureEstimator::kMaxHeight) {
@@ -202,10 +202,10 @@ class Odometry::Impl {
     if (!estimator_->done()) return;
     res_.exposure_estimated = true;
     res_.exposure_pairs = estimator_->pairsScored();
-    const double T = estimator_->exposureSeconds();
+    const double T = res_.exposure_s = estimator_->exposureSeconds();
     if (T >= cfg_.deblur.min_exposure_s && T > 0) {
       exposures_->setExposure(fromSeconds(T));
-      res_.exposure_s = T;
+      res_.deblurred = true;
     } else {
       exposures_.reset();
     }

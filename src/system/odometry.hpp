@@ -208,10 +208,10 @@ struct OdometryResult {
   std::size_t events_flicker_dropped = 0;  // events of flickering pixels, never put into event frames
   std::size_t frames_rejected = 0;         // kept out by the frame quality check (each one also a failure)
   std::size_t frames_tracked_only = 0;     // of those, the frames that still gave a pose (not a keyframe)
-  // The frames' exposure the keyframes were deblurred with (given, or estimated from the first frames
-  // with motion: exposure_pairs of them); 0: none.
+  // The frames' exposure, given or estimated from the first frames with motion (exposure_pairs of them);
+  // 0: none. The keyframes were deblurred with it when `deblurred`.
   double exposure_s = 0;
-  bool exposure_estimated = false;
+  bool exposure_estimated = false, deblurred = false;
   int exposure_pairs = 0;
   std::size_t backend_waits = 0;     // times the tracking thread waited for the threaded back-end
   std::size_t buffered_thinned = 0;  // times the event frames kept during the bootstrap were thinned

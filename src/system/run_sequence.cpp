@@ -250,8 +250,10 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"map_points", r.map.size()},
                  {"backend_waits", r.backend_waits},
                  {"bootstrap_event_frames_thinned", r.buffered_thinned}};
-  j["deblur"] = {
-      {"exposure_s", r.exposure_s}, {"estimated", r.exposure_estimated}, {"pairs_scored", r.exposure_pairs}};
+  j["deblur"] = {{"exposure_s", r.exposure_s},
+                 {"estimated", r.exposure_estimated},
+                 {"pairs_scored", r.exposure_pairs},
+                 {"keyframes_deblurred", r.deblurred}};
   j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},
                      {"event_tracking", timingStats(r.event_track_ms)},
                      {"mapping", timingStats(r.mapping_ms)},

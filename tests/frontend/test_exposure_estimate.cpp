@@ -89,8 +89,8 @@ TEST(ExposureEstimator, FindsTheExposureOfMotionBlurredFrames) {
   }
 }
 
-// Instantaneous frames: what is left is the sensor's quantization (5 ms), below the shortest exposure
-// the odometry deblurs with.
+// Instantaneous frames: what is left is the sensor's quantization (5 ms), well below the shortest
+// exposure the odometry deblurs with.
 TEST(ExposureEstimator, SharpFramesNeedNoDeblurring) {
   const ExposureEstimator est = estimate(record(0.0));
   ASSERT_TRUE(est.done());

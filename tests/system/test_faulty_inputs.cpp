@@ -131,6 +131,7 @@ void expectCarriedThrough(Variant v, double ratio) {
   expectWithinCleanBounds(a, cleanRun(v), true, ratio);
   EXPECT_EQ(r.exposure_estimated, !v.deblur);
   EXPECT_NEAR(r.exposure_s, v.exposure_s, 0.006);
+  EXPECT_EQ(r.deblurred, v.deblur || v.exposure_s >= OdometryConfig{}.deblur.min_exposure_s);
   // The 20 dimmed and 10 blown-out frames, and nothing else (but a few event frames the lost-track
   // check flags), each failure naming its cause.
   EXPECT_EQ(r.frames_rejected, 30u);

@@ -101,13 +101,14 @@ TEST(OdometryApi, EventChunksOf1And1000And100000GiveTheOutputsOfEdsRun) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
   const Sequence seq(dir);
   OdometryConfig cfg = syncConfig();
+  cfg.deblur.min_exposure_s = 0.005;
   // The frames' exposure estimated (the default) and the keyframes deblurred with it: which frame pairs
   // the estimate comes from, and when an exposure is handed on, are part of the merged order too.
   const auto out = test::tempDir("api_chunks");
   const OdometryResult ref = runOdometry(seq, cfg);
   ASSERT_TRUE(ref.initialized);
   ASSERT_TRUE(ref.exposure_estimated);
-  ASSERT_GE(ref.exposure_s, cfg.deblur.min_exposure_s);
+  ASSERT_TRUE(ref.deblurred);
   ASSERT_GT(ref.events.size(), 400u);
   writeOdometryOutputs(out / "run", ref, cfg);
   const EventArray ev = allEvents(seq);

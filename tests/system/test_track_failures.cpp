@@ -33,7 +33,8 @@ std::filesystem::path noisySequence(const std::string& name, double fraction) {
     writer.finish();
   }
   sim::writeEcdCalib(dir / "calib.txt", cam);
-  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), sim::kGroundTruthRateHz);
+  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(),
+                        sim::kGroundTruthRateHz);
   {
     std::ifstream in(dir / "events.txt");
     std::ofstream out(dir / "events_noisy.txt");

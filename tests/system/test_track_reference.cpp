@@ -38,10 +38,10 @@ InstantErrors errorsAtEventTimes(const OdometryResult& run, const TrackOnlyResul
     rf += std::pow((T_gt.so3().inverse() * T_f.so3()).angle(), 2);
   }
   const double n = static_cast<double>(events.size());
-  InstantErrors e{std::sqrt(se / n), std::sqrt(sf / n), std::sqrt(re / n) * 180 / M_PI, std::sqrt(rf / n) * 180 / M_PI,
-                  0};
-  e.mean_correlation =
-      std::accumulate(tr.correlations.begin(), tr.correlations.end(), 0.0) / static_cast<double>(tr.correlations.size());
+  InstantErrors e{std::sqrt(se / n), std::sqrt(sf / n), std::sqrt(re / n) * 180 / M_PI,
+                  std::sqrt(rf / n) * 180 / M_PI, 0};
+  e.mean_correlation = std::accumulate(tr.correlations.begin(), tr.correlations.end(), 0.0) /
+                       static_cast<double>(tr.correlations.size());
   return e;
 }
 
