@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "frontend/exposure_deblur.hpp"
 
@@ -47,6 +48,8 @@ ExposureEstimator::ExposureEstimator(cv::Size sensor, double contrast) : contras
     throw std::invalid_argument("ExposureEstimator: bad sensor size or contrast");
   const int w = std::min(sensor.width, kMaxWidth), h = std::min(sensor.height, kMaxHeight);
   roi_ = cv::Rect((sensor.width - w) / 2, (sensor.height - h) / 2, w, h);
+  log_lut_.create(1, 256, CV_64F);
+  for (int v = 0; v < 256; ++v) log_lut_.at<double>(v) = std::log(v / 255.0 + kLogOffset);
 }
 
 void ExposureEstimator::addEvents(const EventArray& ev, std::size_t begin, std::size_t end) {
@@ -94,6 +97,15 @@ cv::Mat ExposureEstimator::deblur(const Frame& f, TimeNs exposure) const {
   return deblurFrame(f.gray8, ev_, static_cast<std::size_t>(from), ev_.size(), f.t, exposure, contrast_);
 }
 
+std::vector<cv::Mat> ExposureEstimator::logImages(const Frame& f) const {
+  std::vector<cv::Mat> out(candidates_s_.size());
+  for (std::size_t j = 0; j < candidates_s_.size(); ++j) {
+    const TimeNs T = fromSeconds(candidates_s_[j]);
+    cv::LUT(T > 0 ? deblur(f, T) : f.gray8, log_lut_, out[j]);
+  }
+  return out;
+}
+
 void ExposureEstimator::scorePair(const Frame& a, const Frame& b) {
   const int W = roi_.width, H = roi_.height;
   // The signed event count between the two frames.
@@ -103,21 +115,23 @@ void ExposureEstimator::scorePair(const Frame& a, const Frame& b) {
   if (static_cast<double>(last - first) < kMinEventsPerPixel * W * H) return;
   ++tried_;
   for (auto i = first; i < last; ++i) count.at<float>(ev_.y[i], ev_.x[i]) += ev_.p[i] > 0 ? 1.f : -1.f;
+  const std::vector<cv::Mat> La = logs_t_ == a.t ? std::move(logs_) : logImages(a);
+  logs_ = logImages(b);
+  logs_t_ = b.t;
   std::vector<double> cost(candidates_s_.size());
   for (std::size_t j = 0; j < candidates_s_.size(); ++j) {
-    const TimeNs T = fromSeconds(candidates_s_[j]);
-    const cv::Mat La = T > 0 ? deblur(a, T) : a.gray8, Lb = T > 0 ? deblur(b, T) : b.gray8;
     double sum = 0;
     int n = 0;
-    for (int y = 2; y < H - 2; ++y)
+    for (int y = 2; y < H - 2; ++y) {
+      const std::uint8_t *ra = a.gray8.ptr<std::uint8_t>(y), *rb = b.gray8.ptr<std::uint8_t>(y);
+      const double *la = La[j].ptr<double>(y), *lb = logs_[j].ptr<double>(y);
+      const float* c = count.ptr<float>(y);
       for (int x = 2; x < W - 2; ++x) {
-        const int ba = a.gray8.at<std::uint8_t>(y, x), bb = b.gray8.at<std::uint8_t>(y, x);
-        if (ba <= 2 || bb <= 2 || ba >= 250 || bb >= 250) continue;  // clipped: outside the model
-        const double r = std::log(Lb.at<std::uint8_t>(y, x) / 255.0 + kLogOffset) -
-                         std::log(La.at<std::uint8_t>(y, x) / 255.0 + kLogOffset) -
-                         contrast_ * count.at<float>(y, x);
+        if (ra[x] <= 2 || rb[x] <= 2 || ra[x] >= 250 || rb[x] >= 250) continue;  // clipped: outside the model
+        const double r = lb[x] - la[x] - contrast_ * c[x];
         sum += r * r, ++n;
       }
+    }
     cost[j] = n > 0 ? sum / n : 0.0;
   }
   const auto [lo, hi] = std::minmax_element(cost.begin(), cost.end());
@@ -131,6 +145,7 @@ void ExposureEstimator::finish() {
   done_ = true;
   ev_ = EventArray();
   frames_.clear();
+  logs_.clear();
   if (scored_ == 0) return;
   const auto j = static_cast<std::size_t>(std::min_element(score_.begin(), score_.end()) - score_.begin());
   exposure_s_ = candidates_s_[j];

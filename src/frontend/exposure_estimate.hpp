@@ -45,6 +45,8 @@ class ExposureEstimator {
   };
   void scorePair(const Frame& a, const Frame& b);
   cv::Mat deblur(const Frame& f, TimeNs exposure) const;
+  // log(L + offset) of the frame deblurred with each candidate exposure (CV_64F; the frame for 0).
+  std::vector<cv::Mat> logImages(const Frame& f) const;
   void finish();
 
   cv::Rect roi_;
@@ -53,6 +55,10 @@ class ExposureEstimator {
   std::vector<double> score_;         // summed over the scored pairs, each relative to its minimum
   EventArray ev_;                     // in the region, its coordinates
   std::deque<Frame> frames_;
+  cv::Mat log_lut_;  // log(v / 255 + offset) for every 8-bit v
+  // The second frame of the last scored pair is the first of the next: its images are kept.
+  TimeNs logs_t_ = -1;
+  std::vector<cv::Mat> logs_;
   int scored_ = 0, tried_ = 0, frames_seen_ = 0;
   bool done_ = false;
   double exposure_s_ = 0;
