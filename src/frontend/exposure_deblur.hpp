@@ -5,8 +5,10 @@
 // the frame is the mean of L over the exposure, so L(t) = B / mean_s exp(C (E(s) - E(t))). The event
 // tracker takes its gradients from the keyframe's image: blurred, it predicts the events of an edge
 // spread along the motion, where the sensor fires them at the sharp edge.
+#include <array>
 #include <cstddef>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/events.hpp"
 #include "core/reflect.hpp"
@@ -38,5 +40,32 @@ EDS_FIELDS(ExposureDeblurConfig, exposure_s, estimate, min_exposure_s, contrast)
 // their value.
 cv::Mat deblurFrame(const cv::Mat& gray8, const EventArray& events, std::size_t begin, std::size_t end,
                     TimeNs t, TimeNs exposure, double contrast);
+
+// deblurFrame with its per-pixel state kept from one call to the next: the exposure estimate deblurs
+// every frame a dozen times, and allocating the state each time cost as much as the integration.
+class Deblurrer {
+ public:
+  cv::Mat operator()(const cv::Mat& gray8, const EventArray& events, std::size_t begin, std::size_t end,
+                     TimeNs t, TimeNs exposure, double contrast);
+
+ private:
+  // One pixel's signed event count over the exposure and the integral of exp(C count) dt so far.
+  struct PixelState {
+    double integral = 0;  // ns
+    TimeNs last = 0;      // time up to which the integral runs
+    int count = 0;
+    int count_at_t = 0;  // the count at the frame's time
+    bool at_t = false;   // count_at_t is final
+    bool seen = false;
+  };
+  // exp(C count), from a table for the counts a pixel reaches within one exposure.
+  double expCount(double contrast, int count);
+
+  static constexpr int kTableHalf = 64;
+  std::vector<PixelState> state_;  // all reset between calls
+  std::vector<std::size_t> touched_;
+  std::array<double, 2 * kTableHalf + 1> exp_table_{};
+  double table_contrast_ = 0;
+};
 
 }  // namespace eds

@@ -92,12 +92,12 @@ void ExposureEstimator::addFrame(TimeNs t, const cv::Mat& gray8) {
   ev_.p.erase(ev_.p.begin(), ev_.p.begin() + keep);
 }
 
-cv::Mat ExposureEstimator::deblur(const Frame& f, TimeNs exposure) const {
+cv::Mat ExposureEstimator::deblur(const Frame& f, TimeNs exposure) {
   const auto from = std::lower_bound(ev_.t.begin(), ev_.t.end(), f.t - exposure / 2) - ev_.t.begin();
-  return deblurFrame(f.gray8, ev_, static_cast<std::size_t>(from), ev_.size(), f.t, exposure, contrast_);
+  return deblurrer_(f.gray8, ev_, static_cast<std::size_t>(from), ev_.size(), f.t, exposure, contrast_);
 }
 
-std::vector<cv::Mat> ExposureEstimator::logImages(const Frame& f) const {
+std::vector<cv::Mat> ExposureEstimator::logImages(const Frame& f) {
   std::vector<cv::Mat> out(candidates_s_.size());
   for (std::size_t j = 0; j < candidates_s_.size(); ++j) {
     const TimeNs T = fromSeconds(candidates_s_[j]);

@@ -13,6 +13,7 @@
 
 #include "core/events.hpp"
 #include "core/time.hpp"
+#include "frontend/exposure_deblur.hpp"
 
 namespace eds {
 
@@ -44,9 +45,9 @@ class ExposureEstimator {
     cv::Mat gray8;  // the region used
   };
   void scorePair(const Frame& a, const Frame& b);
-  cv::Mat deblur(const Frame& f, TimeNs exposure) const;
+  cv::Mat deblur(const Frame& f, TimeNs exposure);
   // log(L + offset) of the frame deblurred with each candidate exposure (CV_64F; the frame for 0).
-  std::vector<cv::Mat> logImages(const Frame& f) const;
+  std::vector<cv::Mat> logImages(const Frame& f);
   void finish();
 
   cv::Rect roi_;
@@ -55,6 +56,7 @@ class ExposureEstimator {
   std::vector<double> score_;         // summed over the scored pairs, each relative to its minimum
   EventArray ev_;                     // in the region, its coordinates
   std::deque<Frame> frames_;
+  Deblurrer deblurrer_;
   cv::Mat log_lut_;  // log(v / 255 + offset) for every 8-bit v
   // The second frame of the last scored pair is the first of the next: its images are kept.
   TimeNs logs_t_ = -1;
