@@ -46,6 +46,9 @@ void printText(const Sequence& seq, const SequenceStats& s) {
                 toSeconds(s.frames_t1), s.frame_rate);
   else
     std::printf("frames       none\n");
+  if (s.frames_with_exposure > 0)
+    std::printf("exposure     %.3f .. %.3f ms recorded for %zu frames (used to deblur them)\n",
+                s.exposure_min / 1e6, s.exposure_max / 1e6, s.frames_with_exposure);
   if (seq.imuSamples() > 0)
     std::printf("imu          %llu samples (not used by the odometry yet)\n",
                 static_cast<unsigned long long>(seq.imuSamples()));
@@ -70,6 +73,11 @@ void printJson(const Sequence& seq, const SequenceStats& s) {
   j["frames"] = s.frames;
   j["frames_t_first_ns"] = s.frames > 0 ? nlohmann::json(s.frames_t0) : nlohmann::json(nullptr);
   j["frames_t_last_ns"] = s.frames > 0 ? nlohmann::json(s.frames_t1) : nlohmann::json(nullptr);
+  j["frames_with_exposure"] = s.frames_with_exposure;
+  j["exposure_min_ns"] =
+      s.frames_with_exposure > 0 ? nlohmann::json(s.exposure_min) : nlohmann::json(nullptr);
+  j["exposure_max_ns"] =
+      s.frames_with_exposure > 0 ? nlohmann::json(s.exposure_max) : nlohmann::json(nullptr);
   j["imu"] = seq.imuSamples();
   j["triggers"] = s.triggers;
   j["ground_truth"] = s.gt_poses;

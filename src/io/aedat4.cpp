@@ -211,8 +211,10 @@ Aedat4Counts scanAedat4(const std::filesystem::path& file) {
       root.vector(0, kTriggerBytes, n);
       c.triggers += n;
     } else if (p.type == "FRME") {
-      c.frames.push_back(
-          {packetTimeNs(root.scalar<std::int64_t>(0, 0), reader.path(), p.offset, "frame"), p.offset});
+      // Fields 3 and 4: the exposure's start and end (us), written by DV next to the frame's time.
+      const std::int64_t start = root.scalar<std::int64_t>(3, 0), stop = root.scalar<std::int64_t>(4, 0);
+      c.frames.push_back({packetTimeNs(root.scalar<std::int64_t>(0, 0), reader.path(), p.offset, "frame"),
+                          p.offset, start > 0 && stop > start ? (stop - start) * 1000 : 0});
     }
   }
   return c;

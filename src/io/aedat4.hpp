@@ -32,6 +32,7 @@ struct Aedat4Packet {
 struct Aedat4Frame {
   TimeNs t = 0;
   std::uint64_t packet_offset = 0;
+  TimeNs exposure = 0;  // end minus start of the exposure as the camera recorded them; 0: not recorded
 };
 
 class Aedat4Reader {

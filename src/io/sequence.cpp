@@ -253,7 +253,7 @@ void Sequence::openRecordingFile(const fs::path& file) {
     for (const Aedat4Frame& f : counts.frames) {
       if (!frames_.empty() && f.t <= frames_.back().t)
         throw errorAt(file.string(), f.packet_offset, "frame time stamps must increase");
-      frames_.push_back({f.t, file, f.packet_offset});
+      frames_.push_back({f.t, file, f.packet_offset, f.exposure});
     }
     if (counts.events == 0) events_file_.clear();
     return;

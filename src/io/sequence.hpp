@@ -32,6 +32,7 @@ struct FrameRef {
   TimeNs t = 0;
   std::filesystem::path path;  // the image file (folders)
   std::uint64_t offset = 0;    // where the frame is inside a recording file
+  TimeNs exposure = 0;         // as the recording gives it (AEDAT 4.0); 0: not recorded
 };
 
 // How the events of a sequence are stored.

@@ -46,6 +46,12 @@ SequenceStats computeStats(const Sequence& seq) {
     s.frames_t0 = frames.front().t;
     s.frames_t1 = frames.back().t;
     if (frames.size() > 1) s.frame_rate = (frames.size() - 1) / toSeconds(s.frames_t1 - s.frames_t0);
+    for (const FrameRef& f : frames) {
+      if (f.exposure <= 0) continue;
+      s.exposure_min = s.frames_with_exposure == 0 ? f.exposure : std::min(s.exposure_min, f.exposure);
+      s.exposure_max = std::max(s.exposure_max, f.exposure);
+      ++s.frames_with_exposure;
+    }
   }
   if (seq.hasGroundTruth()) {
     const Trajectory gt = seq.groundTruth();

@@ -18,7 +18,9 @@ struct SequenceStats {
   std::size_t triggers = 0;  // external trigger edges recorded with the events
   std::size_t frames = 0;
   TimeNs frames_t0 = 0, frames_t1 = 0;
-  double frame_rate = 0;  // frames - 1 over their span
+  double frame_rate = 0;                      // frames - 1 over their span
+  TimeNs exposure_min = 0, exposure_max = 0;  // of the frames whose exposure is recorded (0: none)
+  std::size_t frames_with_exposure = 0;
   std::size_t gt_poses = 0;
   TimeNs gt_t0 = 0, gt_t1 = 0;
 };

@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace eds {
 
 ExposureEvents::ExposureEvents(TimeNs exposure)
-    : exposure_(exposure), kept_from_(std::numeric_limits<TimeNs>::min()) {
+    : exposure_(exposure), longest_(exposure), kept_from_(std::numeric_limits<TimeNs>::min()) {
   if (exposure <= 0) throw std::invalid_argument("ExposureEvents: the exposure must be > 0");
 }
 
@@ -29,17 +30,23 @@ void ExposureEvents::addEvents(const EventArray& ev, std::size_t begin, std::siz
   trim();
 }
 
-void ExposureEvents::addFrame(TimeNs t, const cv::Mat& gray8) { frames_.push_back({t, gray8}); }
+void ExposureEvents::addFrame(TimeNs t, const cv::Mat& gray8, TimeNs recorded) {
+  if (recorded < 0 || recorded > longest_)
+    throw std::invalid_argument("ExposureEvents: a recorded exposure must be in [0, " +
+                                std::to_string(longest_) + "] ns, got " + std::to_string(recorded));
+  frames_.push_back({t, gray8, recorded});
+}
 
 void ExposureEvents::endExposures(TimeNs up_to, TimeNs processed, const Handler& handle) {
   while (!frames_.empty()) {
     const Frame& f = frames_.front();
-    const TimeNs start = f.t - exposure_ / 2, stop = start + exposure_;
+    const TimeNs exposure = f.recorded > 0 ? f.recorded : exposure_;
+    const TimeNs start = f.t - exposure / 2, stop = start + exposure;
     if (stop > up_to || f.t > processed) break;
     if (start >= kept_from_) {
       const auto from = ev_.t.begin() + static_cast<std::ptrdiff_t>(first_);
       const auto b = std::lower_bound(from, ev_.t.end(), start), e = std::lower_bound(b, ev_.t.end(), stop);
-      handle(f.t, f.gray8, ev_, static_cast<std::size_t>(b - ev_.t.begin()),
+      handle(f.t, exposure, f.recorded > 0, f.gray8, ev_, static_cast<std::size_t>(b - ev_.t.begin()),
              static_cast<std::size_t>(e - ev_.t.begin()));
     }
     frames_.pop_front();
@@ -51,8 +58,8 @@ void ExposureEvents::endExposures(TimeNs up_to, TimeNs processed, const Handler&
 // frame that comes after its exposure's events (a camera delivers it when the exposure has ended).
 void ExposureEvents::trim() {
   if (!any_) return;
-  TimeNs keep = newest_ - 2 * exposure_;
-  if (!frames_.empty()) keep = std::min(keep, frames_.front().t - exposure_ / 2);
+  TimeNs keep = newest_ - 2 * longest_;
+  if (!frames_.empty()) keep = std::min(keep, frames_.front().t - longest_ / 2);
   const auto from = ev_.t.begin() + static_cast<std::ptrdiff_t>(first_);
   const auto it = std::lower_bound(from, ev_.t.end(), keep);
   if (it != from) kept_from_ = std::max(kept_from_, keep);

@@ -15,18 +15,22 @@ namespace eds {
 
 class ExposureEvents {
  public:
-  // What an ended exposure gives: the frame's time and 8-bit image, and the events that were kept
-  // (events[begin, end) spans the exposure).
-  using Handler = std::function<void(TimeNs t, const cv::Mat& gray8, const EventArray& events,
-                                     std::size_t begin, std::size_t end)>;
+  // What an ended exposure gives: the frame's time, its exposure (the recorded one, else the default)
+  // and whether it was recorded, its 8-bit image, and the events that were kept (events[begin, end)
+  // spans the exposure).
+  using Handler = std::function<void(TimeNs t, TimeNs exposure, bool recorded, const cv::Mat& gray8,
+                                     const EventArray& events, std::size_t begin, std::size_t end)>;
 
+  // `exposure`: the default, and the longest a frame's recorded exposure may be.
   explicit ExposureEvents(TimeNs exposure);
   TimeNs exposure() const { return exposure_; }
   // From now on (an estimate replacing the longest exposure assumed until it came).
   void setExposure(TimeNs exposure);
   // Checked events, in time order.
   void addEvents(const EventArray& ev, std::size_t begin, std::size_t end);
-  void addFrame(TimeNs t, const cv::Mat& gray8);
+  // `recorded`: the frame's own exposure as the camera recorded it (0: none, the default applies).
+  // std::invalid_argument when longer than the default given at construction.
+  void addFrame(TimeNs t, const cv::Mat& gray8, TimeNs recorded = 0);
   // Hands on, oldest first, every frame whose exposure ended at or before `up_to` and whose time is
   // not after `processed` (the frame itself went first), then forgets it. A frame whose exposure began
   // before the oldest event kept (it came more than an exposure late) is dropped unhandled.
@@ -36,10 +40,12 @@ class ExposureEvents {
   struct Frame {
     TimeNs t;
     cv::Mat gray8;
+    TimeNs recorded;
   };
   void trim();
 
   TimeNs exposure_;
+  TimeNs longest_;  // of a recorded exposure: the events are kept for the default given at first
   EventArray ev_;
   std::size_t first_ = 0;  // ev_[first_...] are kept; the rest wait to be erased in one go
   TimeNs newest_ = 0;

@@ -11,6 +11,7 @@
 #include <limits>
 #include <optional>
 #include <unordered_map>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/undistorter.hpp"
@@ -54,6 +55,7 @@ class Odometry::Impl {
       // Events are kept from the start as for the longest exposure, so that the frames after the
       // estimate find theirs whatever the chunks they came in; the frames before it are not deblurred.
       exposures_.emplace(fromSeconds(ExposureEstimator::kLongestExposureSeconds));
+      keeps_longest_ = true;
     }
   }
 
@@ -85,7 +87,7 @@ class Odometry::Impl {
     producer_.add(ev, begin, end, [this] { dispatch(false); });
   }
 
-  void addFrame(TimeNs t, const cv::Mat& gray8) {
+  void addFrame(TimeNs t, const cv::Mat& gray8, TimeNs exposure) {
     const ScopedStage api(&clock_, Stage::kUnaccounted);
     checkOpen();
     const cv::Size size(core_.undistorter().raw().width, core_.undistorter().raw().height);
@@ -97,12 +99,17 @@ class Odometry::Impl {
       throw std::invalid_argument("Odometry::addFrame: frame at t = " + std::to_string(t) +
                                   " ns is not after the previous frame (" + std::to_string(last_frame_in_) +
                                   " ns)");
+    if (exposure < 0)
+      throw std::invalid_argument("Odometry::addFrame: frame at t = " + std::to_string(t) +
+                                  " ns has a negative exposure (" + std::to_string(exposure) + " ns)");
     has_frame_in_ = true;
     last_frame_in_ = t;
     {
       const ScopedStage prep(&clock_, Stage::kFramePreparation);
-      frames_.push_back({t, gray8.clone()});
-      if (exposures_) exposures_->addFrame(t, frames_.back().image);
+      // A recorded exposure longer than the events are kept for is not used.
+      const TimeNs recorded = recordedUsable(exposure) ? exposure : 0;
+      frames_.push_back({t, gray8.clone(), recorded});
+      if (exposures_) exposures_->addFrame(t, frames_.back().image, recorded);
     }
     dispatch(false);
   }
@@ -134,7 +141,14 @@ class Odometry::Impl {
   struct PendingFrame {
     TimeNs t;
     cv::Mat image;
+    TimeNs recorded;  // the frame's exposure as recorded, when one can be used; else 0
   };
+
+  // Frames' own exposures are used unless one was given: with the events kept as for the longest.
+  bool recordedUsable(TimeNs exposure) const {
+    return exposure > 0 && keeps_longest_ && exposures_ &&
+           exposure <= fromSeconds(ExposureEstimator::kLongestExposureSeconds);
+  }
 
   static const OdometryConfig& validated(const OdometryConfig& cfg, const CameraModel& camera) {
     validateOdometryConfig(cfg, camera);
@@ -187,11 +201,13 @@ class Odometry::Impl {
   // Exposures that ended before the next item in the merged order (of frames already processed).
   void endExposures(TimeNs up_to) {
     if (!exposures_) return;
-    exposures_->endExposures(
-        up_to, last_frame_done_,
-        [this](TimeNs t, const cv::Mat& raw, const EventArray& ev, std::size_t b, std::size_t e) {
-          if (!estimator_) core_.exposureEnded(t, exposures_->exposure(), raw, ev, b, e);
-        });
+    exposures_->endExposures(up_to, last_frame_done_,
+                             [this](TimeNs t, TimeNs exposure, bool recorded, const cv::Mat& raw,
+                                    const EventArray& ev, std::size_t b, std::size_t e) {
+                               // Once frames come with their exposures, only those are deblurred.
+                               if (recorded_ ? recorded : !estimator_)
+                                 core_.exposureEnded(t, exposure, raw, ev, b, e);
+                             });
   }
 
   // Frames go to the exposure estimator until it has an estimate; the frames after it are deblurred
@@ -212,12 +228,25 @@ class Odometry::Impl {
     estimator_.reset();
   }
 
+  // A frame with its exposure recorded: no estimate is needed, and each such frame is deblurred with its
+  // own exposure (the reported one is their median).
+  void useRecordedExposure(TimeNs exposure) {
+    estimator_.reset();
+    recorded_ = true;
+    res_.exposure_estimated = false;
+    res_.exposure_recorded = res_.deblurred = true;
+    recorded_s_.push_back(toSeconds(exposure));
+    std::nth_element(recorded_s_.begin(), recorded_s_.begin() + recorded_s_.size() / 2, recorded_s_.end());
+    res_.exposure_s = recorded_s_[recorded_s_.size() / 2];
+  }
+
   void processFrame() {
     const PendingFrame f = std::move(frames_.front());
     frames_.pop_front();
     endExposures(f.t);
     if (!has_first_) has_first_ = true, res_.first_t = f.t;
     last_frame_done_ = f.t;
+    if (f.recorded > 0) useRecordedExposure(f.recorded);
     if (estimator_) estimateExposure(f);
     core_.frame(f.t, f.image);
     notify();
@@ -274,6 +303,9 @@ class Odometry::Impl {
   // they do not depend on the chunk size).
   TimeNs checked_t_ = std::numeric_limits<TimeNs>::min();
   std::deque<PendingFrame> frames_;
+  bool keeps_longest_ = false;  // exposures_ keeps the events of the longest exposure estimated
+  bool recorded_ = false;       // frames came with their exposures (those alone are deblurred)
+  std::vector<double> recorded_s_;
   std::optional<ExposureEvents> exposures_;     // with the frames' exposure known (deblurring)
   std::optional<ExposureEstimator> estimator_;  // while the exposure is being estimated
   std::deque<EventFrame> efs_;
@@ -290,7 +322,9 @@ Odometry::~Odometry() = default;
 void Odometry::addEvents(const EventArray& events, std::size_t begin, std::size_t end) {
   impl_->addEvents(events, begin, end);
 }
-void Odometry::addFrame(TimeNs t, const cv::Mat& gray8) { impl_->addFrame(t, gray8); }
+void Odometry::addFrame(TimeNs t, const cv::Mat& gray8, TimeNs exposure) {
+  impl_->addFrame(t, gray8, exposure);
+}
 const OdometryResult& Odometry::finish() { return impl_->finish(); }
 const OdometryResult& Odometry::result() const { return impl_->result(); }
 

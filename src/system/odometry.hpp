@@ -208,10 +208,10 @@ struct OdometryResult {
   std::size_t events_flicker_dropped = 0;  // events of flickering pixels, never put into event frames
   std::size_t frames_rejected = 0;         // kept out by the frame quality check (each one also a failure)
   std::size_t frames_tracked_only = 0;     // of those, the frames that still gave a pose (not a keyframe)
-  // The frames' exposure, given or estimated from the first frames with motion (exposure_pairs of them);
-  // 0: none. The keyframes were deblurred with it when `deblurred`.
+  // The frames' exposure, given, recorded with them (the median) or estimated from the first frames with
+  // motion (exposure_pairs of them); 0: none. The keyframes were deblurred with it when `deblurred`.
   double exposure_s = 0;
-  bool exposure_estimated = false, deblurred = false;
+  bool exposure_estimated = false, exposure_recorded = false, deblurred = false;
   int exposure_pairs = 0;
   std::size_t backend_waits = 0;     // times the tracking thread waited for the threaded back-end
   std::size_t buffered_thinned = 0;  // times the event frames kept during the bootstrap were thinned
@@ -302,8 +302,10 @@ class Odometry {
   // use_events = false.
   void addEvents(const EventArray& events, std::size_t begin = 0, std::size_t end = SIZE_MAX);
   // An 8-bit grayscale frame of the sensor's size, exposed at time t (frames in increasing time);
-  // std::invalid_argument otherwise. The image is copied.
-  void addFrame(TimeNs t, const cv::Mat& gray8);
+  // std::invalid_argument otherwise. The image is copied. `exposure`: the frame's exposure time as the
+  // camera recorded it, t being its middle (0: not known). Unless the configuration gives one, frames
+  // with a recorded exposure of up to 80 ms are deblurred with it, and none is estimated.
+  void addFrame(TimeNs t, const cv::Mat& gray8, TimeNs exposure = 0);
   // Processes what is still waiting, converges the window and returns the whole result. Nothing may
   // be added afterwards.
   const OdometryResult& finish();

@@ -161,7 +161,7 @@ void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseF
     } else if (!item.frame && Clock::now() - item.released > max_wait) {
       rt.events_skipped += item.events.size();
     } else if (item.frame) {
-      odo.addFrame(seq.frames()[item.index].t, item.image);
+      odo.addFrame(seq.frames()[item.index].t, item.image, seq.frames()[item.index].exposure);
     } else {
       odo.addEvents(item.events);
     }

@@ -112,7 +112,7 @@ std::optional<TimeNs> feedSequence(const Sequence& seq, const std::vector<std::s
     if (stop != nullptr && stop->load(std::memory_order_relaxed)) return fed;
     if (item.frame) {
       fed = seq.frames()[item.index].t;
-      odo.addFrame(fed, item.image);
+      odo.addFrame(fed, item.image, seq.frames()[item.index].exposure);
     } else {
       odo.addEvents(item.events, 0, item.events.size());
       fed = std::max(fed, item.events.t.back());
@@ -252,6 +252,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"bootstrap_event_frames_thinned", r.buffered_thinned}};
   j["deblur"] = {{"exposure_s", r.exposure_s},
                  {"estimated", r.exposure_estimated},
+                 {"recorded", r.exposure_recorded},
                  {"pairs_scored", r.exposure_pairs},
                  {"keyframes_deblurred", r.deblurred}};
   j["timings_ms"] = {{"frame_tracking", timingStats(r.track_ms)},

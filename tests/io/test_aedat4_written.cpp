@@ -63,6 +63,8 @@ TEST(WrittenAedat4, EventsFramesImuAndTriggersComeOutAsWritten) {
     ASSERT_EQ(aedat.frames().size(), 13u);  // 0 .. 0.48 s at 25 Hz
     for (std::size_t i = 0; i < aedat.frames().size(); ++i) {
       ASSERT_EQ(aedat.frames()[i].t, folder.frames()[i].t);
+      // Written for every frame but the first: 1, 2 or 3 ms.
+      EXPECT_EQ(aedat.frames()[i].exposure, i == 0 ? 0 : static_cast<TimeNs>(1 + i % 3) * 1'000'000) << i;
       ASSERT_EQ(cv::norm(aedat.loadFrame(i), folder.loadFrame(i), cv::NORM_INF), 0.0) << i;
     }
     ASSERT_EQ(aedat.imu().size(), 101u);  // 200 Hz, k = 0 .. 100

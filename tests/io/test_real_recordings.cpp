@@ -222,6 +222,7 @@ struct AedatReference {
   const char* file;
   std::uint64_t events, on, imu;
   std::vector<std::int64_t> frames_us;
+  std::int64_t exposure_us;  // of every frame: end minus start of its exposure as DV recorded them
   double span_s;
 };
 
@@ -233,12 +234,14 @@ TEST(Aedat4, Davis346FilesReproduceTheirReferenceNumbers) {
        72363,
        130,
        {1633953690978904, 1633953691018904, 1633953691058904},
+       4773,
        0.130},
       {"davis346_street.aedat4",
        6676,
        3563,
        160,
        {1589163147365215, 1589163147405215, 1589163147445215, 1589163147485215},
+       500,
        0.170},
   };
   for (const AedatReference& r : refs) {
@@ -248,7 +251,11 @@ TEST(Aedat4, Davis346FilesReproduceTheirReferenceNumbers) {
     EXPECT_EQ(c.events_on, r.on);
     EXPECT_EQ(c.imu_samples.size(), r.imu);
     ASSERT_EQ(c.frames.size(), r.frames_us.size());
-    for (std::size_t i = 0; i < c.frames.size(); ++i) EXPECT_EQ(c.frames[i].t, r.frames_us[i] * 1000);
+    for (std::size_t i = 0; i < c.frames.size(); ++i) {
+      EXPECT_EQ(c.frames[i].t, r.frames_us[i] * 1000);
+      // DV stamps a frame at the middle of its exposure (indoor frame 0: 1633953690976518 to ..981291 us).
+      EXPECT_EQ(c.frames[i].exposure, r.exposure_us * 1000);
+    }
     // The same numbers through a Sequence: events streamed, frames decoded on demand.
     const Sequence seq(dir / r.file);
     EXPECT_EQ(seq.format(), "AEDAT 4.0");

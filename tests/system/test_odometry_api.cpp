@@ -33,9 +33,10 @@ EventArray allEvents(const Sequence& seq) {
 // Feeds every frame and event of `seq` in event chunks of `chunk`, frames interleaved by time: each
 // frame right after the events up to its time stamp (a chunk is split there). With `frames_early`,
 // each frame goes in before the whole chunk that holds the events past it instead, so that frames
-// wait for events (chunks must then span less than the stream's waits).
+// wait for events (chunks must then span less than the stream's waits). Each frame comes with
+// `exposure` as its recorded exposure.
 const OdometryResult& feed(Odometry& odo, const Sequence& seq, const EventArray& ev, std::size_t chunk,
-                           bool frames_early = false) {
+                           bool frames_early = false, TimeNs exposure = 0) {
   const std::vector<FrameRef>& frames = seq.frames();
   std::size_t f = 0;
   for (std::size_t a = 0; a < ev.size(); a += chunk) {
@@ -47,11 +48,11 @@ const OdometryResult& feed(Odometry& odo, const Sequence& seq, const EventArray&
         odo.addEvents(ev, i, static_cast<std::size_t>(upto));
         i = static_cast<std::size_t>(upto);
       }
-      odo.addFrame(frames[f].t, seq.loadFrame(f));
+      odo.addFrame(frames[f].t, seq.loadFrame(f), exposure);
     }
     odo.addEvents(ev, i, b);
   }
-  for (; f < frames.size(); ++f) odo.addFrame(frames[f].t, seq.loadFrame(f));
+  for (; f < frames.size(); ++f) odo.addFrame(frames[f].t, seq.loadFrame(f), exposure);
   return odo.finish();
 }
 
@@ -132,6 +133,36 @@ TEST(OdometryApi, EventChunksOf1And1000And100000GiveTheOutputsOfEdsRun) {
     writeOdometryOutputs(out / name, r, cfg);
     expectSameOutputs(out / "run", out / name);
   }
+}
+
+TEST(OdometryApi, FramesWithTheirExposureRecordedAreDeblurredAsWithItGiven) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  OdometryConfig given = syncConfig();
+  given.deblur.exposure_s = 0.02;
+  const auto out = test::tempDir("api_recorded_exposure");
+  const OdometryResult ref = runOdometry(seq, given);
+  ASSERT_TRUE(ref.deblurred);
+  writeOdometryOutputs(out / "given", ref, given);
+  // Nothing given: the frames' own exposure replaces the estimate.
+  const OdometryConfig cfg = syncConfig();
+  const EventArray ev = allEvents(seq);
+  Odometry odo(seq.camera(), cfg);
+  const OdometryResult& r = feed(odo, seq, ev, 10000, false, fromSeconds(0.02));
+  EXPECT_TRUE(r.exposure_recorded);
+  EXPECT_FALSE(r.exposure_estimated);
+  EXPECT_TRUE(r.deblurred);
+  EXPECT_EQ(r.exposure_s, 0.02);
+  writeOdometryOutputs(out / "recorded", r, cfg);
+  expectSameOutputs(out / "given", out / "recorded");
+  // Longer than the events are kept for: not used, the exposure is estimated as without one.
+  Odometry odo_long(seq.camera(), cfg);
+  const OdometryResult& l = feed(odo_long, seq, ev, 10000, false, fromSeconds(0.1));
+  EXPECT_FALSE(l.exposure_recorded);
+  EXPECT_TRUE(l.exposure_estimated);
+  EXPECT_THROW(odo_long.addFrame(0, seq.loadFrame(0), -1), std::logic_error);  // finished
+  Odometry odo_bad(seq.camera(), cfg);
+  EXPECT_THROW(odo_bad.addFrame(1000, seq.loadFrame(0), -1), std::invalid_argument);
 }
 
 // Records what the listener is told.

@@ -12,7 +12,9 @@ usage: write_aedat4.py --header-only OUT.aedat4 XML
 Layouts (iniVation's dv-processing schemas): IOHeader {compression: int32 (0 none, 1 lz4, 3 zstd),
 dataTablePosition: int64, infoNode: string}; packets are size-prefixed FlatBuffers with a file identifier:
 EventPacket {elements: [Event]} with struct Event {timestamp: int64 us; x, y: int16; polarity: bool};
-Frame {timestamp 0, format 5 (int8, 0 gray), sizeX 6, sizeY 7 (int16), pixels 10 ([ubyte])};
+Frame {timestamp 0, timestampStartOfExposure 3, timestampEndOfExposure 4 (int64 us), format 5 (int8, 0
+gray), sizeX 6, sizeY 7 (int16), pixels 10 ([ubyte])}: frame k > 0 exposed for 1 + (k mod 3) ms around
+its time stamp, frame 0 without exposure fields;
 IMUPacket {elements: [IMU]} with IMU {timestamp 0, temperature 1, accelerometerX..Z 2-4 (g),
 gyroscopeX..Z 5-7 (deg/s)}; TriggerPacket {elements: [Trigger]} with Trigger {timestamp 0, type 1}.
 """
@@ -68,11 +70,14 @@ def events_packet(events):
     return bytes(b.Output())
 
 
-def frame_packet(t_us, img):
+def frame_packet(t_us, img, exposure_us):
     b = flatbuffers.Builder(img.size[0] * img.size[1] + 256)
     pixels = b.CreateByteVector(img.tobytes())
     b.StartObject(12)
     b.PrependInt64Slot(0, t_us, 0)
+    if exposure_us > 0:
+        b.PrependInt64Slot(3, t_us - exposure_us // 2, 0)
+        b.PrependInt64Slot(4, t_us - exposure_us // 2 + exposure_us, 0)
     b.PrependInt8Slot(5, 0, 0)
     b.PrependInt16Slot(6, img.size[0], 0)
     b.PrependInt16Slot(7, img.size[1], 0)
@@ -133,8 +138,8 @@ def write_recording(seq_dir, out, compression, until):
     packets = []  # (time, stream, bytes), in time order as DV writes them
     for i in range(0, len(events), 5000):
         packets.append((events[i + min(4999, len(events) - 1 - i)][0], 0, events_packet(events[i:i + 5000])))
-    for t, img in frames:
-        packets.append((t, 1, frame_packet(t, img)))
+    for k, (t, img) in enumerate(frames):
+        packets.append((t, 1, frame_packet(t, img, 0 if k == 0 else 1000 * (1 + k % 3))))
     imu = [[(0, "i64", 5000 * k), (1, "f32", 30.0), (2, "f32", 0.01), (3, "f32", 1.0), (4, "f32", -0.02 * k),
             (5, "f32", float(k)), (6, "f32", -2.0 * k), (7, "f32", 50.0)] for k in range(int((until or 1.0) * 200) + 1)]
     packets.append((imu[-1][0][2], 2, tables_packet(b"IMUS", imu)))
