@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
 """Applies one-line mutations one at a time, rebuilds and runs the named test programs, and reports
-which test killed each. The source file is always restored, also on Ctrl-C."""
+which test killed each. The source file is always restored, also on Ctrl-C.
+
+The test that killed a mutation last time (tests/mutation/killers.txt) runs first, alone: most mutations
+die there in seconds, and only the others run their whole test programs. --record writes the killers
+found back to that file."""
 import argparse
 import pathlib
 import re
@@ -34,7 +38,38 @@ def failed_tests(output):
     return list(dict.fromkeys(n for n in names if "." in n))
 
 
-def run_mutation(m, build, timeout):
+def load_killers(path):
+    killers = {}
+    p = pathlib.Path(path)
+    if p.exists():
+        for line in p.read_text().splitlines():
+            if line.strip() and not line.lstrip().startswith("#"):
+                mid, test = line.split()
+                killers[mid] = test
+    return killers
+
+
+def save_killers(path, killers):
+    lines = ["# The test that last killed each mutation of mutations.txt (written by mutate.py --record);",
+             "# run first, alone, before the whole test programs."]
+    lines += [f"{mid} {test}" for mid, test in sorted(killers.items())]
+    pathlib.Path(path).write_text("\n".join(lines) + "\n")
+
+
+def run_tests(exe, args, timeout):
+    """(killed, what, failed test names) for one run of a test program."""
+    try:
+        r = subprocess.run([str(exe), *args], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return True, f"timeout ({timeout} s)", []
+    if r.returncode == 0:
+        return False, "", []
+    names = failed_tests(r.stdout)
+    shown = names or [f"exit code {r.returncode}"]
+    return True, ", ".join(shown[:3]) + (" ..." if len(shown) > 3 else ""), names
+
+
+def run_mutation(m, build, timeout, killer=None):
     src = pathlib.Path(m["file"])
     original = src.read_text()
     if original.count(m["before"]) != 1:
@@ -46,18 +81,15 @@ def run_mutation(m, build, timeout):
         b = subprocess.run(["cmake", "--build", build, "--target", *targets], capture_output=True, text=True)
         if b.returncode != 0:
             return "no compile", "", time.monotonic() - t0
-        for mod in m["modules"]:
-            exe = pathlib.Path(build) / "tests" / f"eds_test_{mod}"
-            try:
-                # The first failing test is enough to kill a mutation; the rest would only cost time.
-                r = subprocess.run([str(exe), "--gtest_fail_fast"], capture_output=True, text=True,
-                                   timeout=timeout)
-            except subprocess.TimeoutExpired:
-                return "killed", f"{mod}: timeout ({timeout} s)", time.monotonic() - t0
-            if r.returncode != 0:
-                names = failed_tests(r.stdout) or [f"exit code {r.returncode}"]
-                return "killed", f"{mod}: " + ", ".join(names[:3]) + (" ..." if len(names) > 3 else ""), \
-                    time.monotonic() - t0
+        exes = [(mod, pathlib.Path(build) / "tests" / f"eds_test_{mod}") for mod in m["modules"]]
+        # The last killer alone first; then the whole programs, each stopped at its first failure.
+        passes = ([["--gtest_filter=" + killer]] if killer else []) + [["--gtest_fail_fast"]]
+        for args in passes:
+            for mod, exe in exes:
+                killed, what, names = run_tests(exe, args, timeout)
+                if killed:
+                    m["killer"] = names[0] if names else None
+                    return "killed", f"{mod}: {what}", time.monotonic() - t0
         return "survived", "", time.monotonic() - t0
     finally:
         src.write_text(original)
@@ -68,9 +100,12 @@ def main():
     ap.add_argument("--build", required=True)
     ap.add_argument("--list", required=True)
     ap.add_argument("--timeout", type=int, default=900, help="seconds per test program")
+    ap.add_argument("--killers", default="tests/mutation/killers.txt")
+    ap.add_argument("--record", action="store_true", help="write the killers found to --killers")
     ap.add_argument("ids", nargs="*")
     a = ap.parse_args()
     muts = load(a.list)
+    killers = load_killers(a.killers)
     if a.ids:
         unknown = set(a.ids) - {m["id"] for m in muts}
         if unknown:
@@ -80,7 +115,10 @@ def main():
     print("| mutation | file | what | result | killed by | s |\n|---|---|---|---|---|---|", flush=True)
     try:
         for m in muts:
-            result, by, secs = run_mutation(m, a.build, a.timeout)
+            result, by, secs = run_mutation(m, a.build, a.timeout, killers.get(m["id"]))
+            if a.record and m.get("killer"):
+                killers[m["id"]] = m["killer"]
+                save_killers(a.killers, killers)
             rows.append((m, result))
             print(f"| {m['id']} | {m['file']} | {m['what']} | {result} | {by} | {secs:.0f} |", flush=True)
     finally:  # leave the build matching the restored sources
