@@ -8,6 +8,7 @@ found back to that file."""
 import argparse
 import pathlib
 import re
+import signal
 import subprocess
 import sys
 import time
@@ -104,7 +105,13 @@ def main():
     ap.add_argument("--record", action="store_true", help="write the killers found to --killers")
     ap.add_argument("ids", nargs="*")
     a = ap.parse_args()
+    # The source must be restored however the run ends: SIGTERM, and SIGINT even where a background
+    # shell started it with SIGINT ignored, unwind through the `finally` blocks.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(1))
     muts = load(a.list)
+    # A header mutation rebuilds every file that includes it: those go last.
+    muts.sort(key=lambda m: m["file"].endswith((".hpp", ".h")))
     killers = load_killers(a.killers)
     if a.ids:
         unknown = set(a.ids) - {m["id"] for m in muts}
