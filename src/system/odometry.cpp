@@ -122,6 +122,7 @@ class Odometry::Impl {
     dispatch(true);
     endExposures(std::numeric_limits<TimeNs>::max());
     core_.finish();
+    reportRecordedExposure();
     res_.events_flicker_dropped = producer_.flickerDropped();
     res_.event_thread = producer_.threaded();
     if (res_.event_thread) res_.event_stages_s = producer_.threadStageSeconds();
@@ -236,6 +237,11 @@ class Odometry::Impl {
     res_.exposure_estimated = false;
     res_.exposure_recorded = res_.deblurred = true;
     recorded_s_.push_back(toSeconds(exposure));
+  }
+
+  // The median of the recorded exposures, once at the end (a sort per frame would grow with the run).
+  void reportRecordedExposure() {
+    if (recorded_s_.empty()) return;
     std::nth_element(recorded_s_.begin(), recorded_s_.begin() + recorded_s_.size() / 2, recorded_s_.end());
     res_.exposure_s = recorded_s_[recorded_s_.size() / 2];
   }
