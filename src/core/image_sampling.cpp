@@ -28,13 +28,24 @@ double sampleBicubic(const cv::Mat& img, double x, double y, double* dx, double*
   double wx[4], dwx[4], wy[4], dwy[4];
   cubicWeights(x - fx, wx, dwx);
   cubicWeights(y - fy, wy, dwy);
+  // Away from the border (nearly every call) the 4x4 taps are read without clamping; the sums are the
+  // same either way.
+  const bool interior = x0 >= 1 && y0 >= 1 && x0 + 2 < W && y0 + 2 < H;
+  float taps[4][4];
+  for (int j = 0; j < 4; ++j) {
+    if (interior) {
+      const float* row = img.ptr<float>(y0 - 1 + j) + (x0 - 1);
+      for (int i = 0; i < 4; ++i) taps[j][i] = row[i];
+    } else {
+      const float* row = img.ptr<float>(std::clamp(y0 - 1 + j, 0, H - 1));
+      for (int i = 0; i < 4; ++i) taps[j][i] = row[std::clamp(x0 - 1 + i, 0, W - 1)];
+    }
+  }
   double val = 0, gx = 0, gy = 0;
   for (int j = 0; j < 4; ++j) {
-    const int yy = std::clamp(y0 - 1 + j, 0, H - 1);
-    const float* row = img.ptr<float>(yy);
     double rv = 0, rd = 0;
     for (int i = 0; i < 4; ++i) {
-      const double p = row[std::clamp(x0 - 1 + i, 0, W - 1)];
+      const double p = taps[j][i];
       rv += wx[i] * p;
       rd += dwx[i] * p;
     }

@@ -15,6 +15,7 @@ void EventTrackerConfig::validate() const {
   if (max_iterations < 1) throw std::invalid_argument("event tracker: max_iterations must be >= 1");
   if (!(huber_initial > 0)) throw std::invalid_argument("event tracker: huber_initial must be > 0");
   if (min_points < 6) throw std::invalid_argument("event tracker: min_points must be >= 6");
+  if (!(converged_step_px >= 0)) throw std::invalid_argument("event tracker: converged_step_px must be >= 0");
 }
 
 EventTracker::EventTracker(const CameraModel& pinhole, EventTrackerConfig cfg)
@@ -41,6 +42,10 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
                                 " has no point with a depth (" + std::to_string(kf.points.size()) +
                                 " points)");
   const auto n = static_cast<Eigen::Index>(p_kf_.size());
+  std::vector<double> rho(n);
+  for (Eigen::Index i = 0; i < n; ++i) rho[i] = g_rho_[i].z();
+  std::nth_element(rho.begin(), rho.begin() + n / 2, rho.end());
+  median_inv_depth_ = rho[n / 2];
   idx_.reserve(n);
   m_.resize(n);
   mh_.resize(n);
@@ -199,14 +204,16 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
   LmDamping lm(cfg_.lambda_initial, kLambdaFloor);
   const double d = huber_;
   double cost = huberSum(r, d) + priorCost(prior, data_var_, T_ef_kf);
-  int it = 0;
-  for (; it < cfg_.max_iterations; ++it) {
+  int done = 0;
+  bool converged = false;
+  for (int it = 0; it < cfg_.max_iterations && !converged; ++it) {
+    ++done;
     // Normal equations with the IRLS weights of the Huber norm, as two small GEMMs.
-    Eigen::VectorXd w(r.size());
-    for (Eigen::Index i = 0; i < r.size(); ++i) w[i] = huberWeight(r[i], d);
-    const Eigen::MatrixXd JtW = (J.array().colwise() * w.array()).matrix().transpose();
-    Eigen::Matrix<double, 12, 12> H = JtW * J;
-    Eigen::Matrix<double, 12, 1> g = JtW * r;
+    w_.resize(r.size());
+    for (Eigen::Index i = 0; i < r.size(); ++i) w_[i] = huberWeight(r[i], d);
+    JtW_ = (J.array().colwise() * w_.array()).matrix().transpose();
+    Eigen::Matrix<double, 12, 12> H = JtW_ * J;
+    Eigen::Matrix<double, 12, 1> g = JtW_ * r;
     if (prior) accumulatePosePrior(*prior, data_var_, T_ef_kf, H, g);
     bool improved = false;
     for (int tries = 0; tries < 6 && !improved; ++tries) {
@@ -217,30 +224,31 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
       const SE3 T_new = SE3::exp(delta.head<6>()) * T_ef_kf;
       Vec6 nu_new = nu + delta.tail<6>();
       nu_new.normalize();
-      Eigen::VectorXd r_new;
-      Eigen::MatrixXd J_new;
-      const int n_new = evaluate(img, T_new, nu_new, r_new, &J_new);
+      const int n_new = evaluate(img, T_new, nu_new, r_try_, &J_try_);
       const double cost_new =
-          n_new >= cfg_.min_points ? huberSum(r_new, d) + priorCost(prior, data_var_, T_new) : 1e300;
+          n_new >= cfg_.min_points ? huberSum(r_try_, d) + priorCost(prior, data_var_, T_new) : 1e300;
       if (cost_new < cost) {
         const double gain = cost - cost_new;
         T_ef_kf = T_new;
         nu = nu_new;
-        r = std::move(r_new);
-        J = std::move(J_new);
+        r.swap(r_try_);
+        J.swap(J_try_);
         n = n_new;
         cost = cost_new;
         lm.accepted();
         improved = true;
-        // Converged when the cost barely moves or the step is far below what the events resolve.
-        if (gain < 1e-4 * cost || delta.head<6>().norm() < 1e-6) it = cfg_.max_iterations;
+        // Converged when the cost barely moves or the step moves the points by a small fraction of a
+        // pixel (rotation, and translation at the median depth): what the events resolve.
+        const double step_px =
+            cam_.fx * (delta.segment<3>(3).norm() + delta.head<3>().norm() * median_inv_depth_);
+        converged = gain < 1e-4 * cost || step_px < cfg_.converged_step_px;
       } else {
         lm.rejected();
       }
     }
     if (!improved) break;
   }
-  iterations += std::min(it + 1, cfg_.max_iterations);
+  iterations += done;
   cost_out = cost;
   return n;
 }
@@ -250,9 +258,7 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
   TrackResult res;
   if (p_kf_.empty()) throw std::logic_error("EventTracker::track before setKeyframe");
   if (cfg_.egm_at_view) linearizeAt(T_ef_kf);
-  Eigen::VectorXd r;
-  Eigen::MatrixXd J;
-  int n = evaluate(ef.delta, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
+  int n = pointsInView(T_ef_kf, ef.delta.cols, ef.delta.rows);
   if (n < cfg_.min_points) {
     res.points_in_view = n;
     res.failure = "only " + std::to_string(n) + " points in view";
@@ -260,6 +266,8 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
   }
   // Coarse to fine: the event frame blurred more at first widens the basin of convergence (a 3x3
   // blurred edge pulls the points from ~1-2 px only).
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;
   double cost = 0;
   int iterations = 0;
   for (int level = (levels > 0 ? levels : cfg_.levels) - 1; level >= 0; --level) {

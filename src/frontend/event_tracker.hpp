@@ -25,7 +25,9 @@
 namespace eds {
 
 struct EventTrackerConfig {
-  int max_iterations = 12;     // per level
+  int max_iterations = 12;  // per level
+  // A solve ends when a step moves the points by less than this (px), or lowers the cost by < 1e-4.
+  double converged_step_px = 0.02;
   int levels = 3;              // coarse-to-fine: event frame blurred by 0, 1.5, 3 px
   double huber_initial = 0.1;  // on normalized residuals; then 1.345 * 1.4826 * MAD after each solve
   bool adapt_huber = true;
@@ -39,8 +41,8 @@ struct EventTrackerConfig {
   void validate() const;
 };
 
-EDS_FIELDS(EventTrackerConfig, max_iterations, levels, huber_initial, adapt_huber, border, set_margin,
-           min_points, min_correlation, lambda_initial, egm_at_view)
+EDS_FIELDS(EventTrackerConfig, max_iterations, converged_step_px, levels, huber_initial, adapt_huber, border,
+           set_margin, min_points, min_correlation, lambda_initial, egm_at_view)
 
 // A Gaussian prior on the pose (a motion model's prediction). Its error is the left twist
 // e = log(T_ef_kf · T_prior⁻¹) = (translation, rotation), with standard deviations `sigma` in metres and
@@ -114,7 +116,8 @@ class EventTracker {
                  Eigen::MatrixXd& J, double& cost, int& iterations) const;
 
   double huber_;
-  double data_var_;  // variance of one residual (robust, from the last solve): the prior's scale
+  double median_inv_depth_ = 1;  // of the keyframe's points: a step's translation in pixels
+  double data_var_;              // variance of one residual (robust, from the last solve): the prior's scale
   mutable cv::Mat blurred_;
   // Scratch (kept between frames: no allocation per frame once warm).
   mutable std::vector<int> idx_;
@@ -122,6 +125,8 @@ class EventTracker {
   mutable bool use_set_ = false;
   mutable Eigen::VectorXd m_, mh_;
   mutable Eigen::Matrix<double, Eigen::Dynamic, 6> D_, A_;
+  mutable Eigen::VectorXd w_, r_try_;  // a solve's weights and the residuals of a step being tried
+  mutable Eigen::MatrixXd J_try_, JtW_;
 };
 
 }  // namespace eds
