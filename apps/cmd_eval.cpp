@@ -59,6 +59,8 @@ void printReport(const EvalOptions& o, const eval::AteResult& r, double median_o
   printStatsRow("translation", r.trans, 1.0, "m");
   printStatsRow("translation", r.trans, 100.0, "cm");
   printStatsRow("rotation", r.rot, 1.0, "deg");
+  // Not ending in "deg": scripts that take the rotation row by its unit keep taking the one above.
+  printStatsRow("rotation", r.rot_oriented, 1.0, "deg, orientations aligned");
 }
 
 void printRpe(const std::vector<eval::RpeResult>& rpe) {

@@ -1,5 +1,6 @@
 #include "eval/ate.hpp"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -115,6 +116,18 @@ bool alignSegment(const Trajectory& est, const Trajectory& gt, const std::vector
     r.rot_errors_deg.push_back(rotationAngle(E) * 180.0 / std::numbers::pi);
     r.pairs.push_back(pairs[i]);
   }
+  // The rotation R minimizing Σ ‖R_gt − R R_est‖²: the polar factor of Σ R_gt R_estᵀ.
+  Mat3 M = Mat3::Zero();
+  for (std::size_t i = 0; i < n; ++i)
+    M += q_gt[i].toRotationMatrix() * q_est[i].toRotationMatrix().transpose();
+  const Eigen::JacobiSVD<Mat3> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 D = Mat3::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  const Mat3 R_o = svd.matrixU() * D * svd.matrixV().transpose();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Mat3 E = (R_o * q_est[i].toRotationMatrix()) * q_gt[i].toRotationMatrix().transpose();
+    r.rot_oriented_errors_deg.push_back(rotationAngle(E) * 180.0 / std::numbers::pi);
+  }
   return true;
 }
 
@@ -142,6 +155,7 @@ AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vec
     throw std::invalid_argument("no map segment of the estimate has enough matched poses to align");
   r.trans = computeStats(r.trans_errors);
   r.rot = computeStats(r.rot_errors_deg);
+  r.rot_oriented = computeStats(r.rot_oriented_errors_deg);
   r.coverage = computeCoverage(est, gt, r.pairs, cfg.window, cfg.max_coverage_gap);
   return r;
 }
@@ -193,14 +207,17 @@ AteResult evaluateAteFiles(const std::filesystem::path& gt_file, const std::file
 }
 
 nlohmann::json toJson(const AteResult& r) {
-  return {{"trans", toJson(r.trans)},
-          {"rot", toJson(r.rot)},
-          {"matched_pairs", r.pairs.size()},
-          {"coverage", r.coverage},
-          {"alignment", toString(r.alignment)},
-          {"align_frames", r.align_frames},
-          {"scale", r.transform.s},
-          {"segments", r.segment_transforms.size()}};
+  nlohmann::json j;
+  j["trans"] = toJson(r.trans);
+  j["rot"] = toJson(r.rot);
+  j["rot_oriented"] = toJson(r.rot_oriented);
+  j["matched_pairs"] = r.pairs.size();
+  j["coverage"] = r.coverage;
+  j["alignment"] = toString(r.alignment);
+  j["align_frames"] = r.align_frames;
+  j["scale"] = r.transform.s;
+  j["segments"] = r.segment_transforms.size();
+  return j;
 }
 
 void writeJson(const std::filesystem::path& file, const AteResult& r) { writeJson(file, toJson(r)); }

@@ -43,6 +43,11 @@ struct AteResult {
   std::vector<double> rot_errors_deg;  // degrees, one per pair
   ErrorStats trans;
   ErrorStats rot;
+  // The rotation errors against the best constant rotation of each segment (the chordal mean of
+  // R_gt R_estᵀ) instead of the alignment's, which the positions alone determine: on a path short against
+  // its position errors that rotation is poorly determined and dominates `rot`; this one is not.
+  std::vector<double> rot_oriented_errors_deg;
+  ErrorStats rot_oriented;
   double coverage = 0.0;  // fraction of the ground-truth time span covered, in [0, 1]
   std::vector<std::size_t> segment_starts;
   std::vector<Sim3> segment_transforms;
@@ -79,7 +84,8 @@ AteResult evaluateAte(const EvalInputs& in, const EvalConfig& cfg);
 AteResult evaluateAteFiles(const std::filesystem::path& gt_file, const std::filesystem::path& est_file,
                            const EvalConfig& cfg);
 
-// JSON with trans.{rmse,mean,median,std,min,max,num_samples} (m), rot.{...} (deg), matched_pairs,
+// JSON with trans.{rmse,mean,median,std,min,max,num_samples} (m), rot.{...} (deg), rot_oriented.{...}
+// (deg), matched_pairs,
 // coverage, alignment, align_frames and scale.
 nlohmann::json toJson(const AteResult& r);
 void writeJson(const std::filesystem::path& file, const AteResult& r);
