@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "backend/normal_equations.hpp"
 #include "core/image_sampling.hpp"
 #include "core/parallel.hpp"
 #include "core/robust.hpp"
@@ -16,7 +17,6 @@ namespace eds {
 
 namespace {
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
-constexpr int kFrameParams = 8;  // pose (6), a, b
 
 constexpr double kLambdaFloor = 1e-8;
 
@@ -157,13 +157,28 @@ std::vector<double> PhotometricBA::patternRms(const std::vector<BaFrame>& frames
   return rms;
 }
 
-// Normal equations of the photometric terms with the points kept apart (one inverse depth each), so
-// that they can be eliminated by the Schur complement. Hfp holds one column per point.
-struct NormalEquations {
-  Eigen::MatrixXd Hff;
-  Eigen::VectorXd bf;
-  std::vector<double> Hpp, bp;
-  Eigen::MatrixXd Hfp;
+// The robust cost of the photometric terms and the squares of their residuals, summed in the order of
+// the points so that cost() and accumulate() give the same figure to the last bit.
+struct CostSums {
+  double c = 0, ss = 0;
+  int n = 0;
+  void addPointPrior(const BaPoint& p, double rho) {
+    const double e = rho - p.prior_inv_depth;
+    c += 0.5 * p.prior_weight * e * e;
+  }
+  void addPattern(const Eigen::Matrix<double, 8, 1>& r, const HostPattern& g, double huber) {
+    for (int k = 0; k < 8; ++k) {
+      c += g.w[k] * huberCost(r[k], huber);
+      ss += r[k] * r[k];
+      ++n;
+    }
+  }
+  static CostSums total(const std::array<CostSums, kReductionChunks>& part) {
+    CostSums t;
+    for (const CostSums& s : part) t.c += s.c, t.ss += s.ss, t.n += s.n;
+    return t;
+  }
+  double rmse() const { return n ? std::sqrt(ss / n) : 0.0; }
 };
 
 namespace {
@@ -211,6 +226,28 @@ void pairBlocks(const Eigen::Matrix<double, 8, 17>& J, const Eigen::Matrix<doubl
   out.bp = G(9, 8);
 }
 
+// Adds one pair's blocks to a chunk's frame blocks and to the point's column and diagonal; sh, st:
+// the slots of host and target (< 0: constant frame).
+void addPairBlocks(const PairBlocks& pb, int sh, int st, Eigen::Index i, Eigen::MatrixXd& Hff,
+                   Eigen::VectorXd& bf, NormalEquations& ne) {
+  if (sh >= 0) {
+    Hff.block<8, 8>(sh * 8, sh * 8) += pb.Hhh;
+    bf.segment<8>(sh * 8) += pb.bh;
+    ne.Hfp.col(i).segment<8>(sh * 8) += pb.fh;
+  }
+  if (st >= 0) {
+    Hff.block<8, 8>(st * 8, st * 8) += pb.Htt;
+    bf.segment<8>(st * 8) += pb.bt;
+    ne.Hfp.col(i).segment<8>(st * 8) += pb.ft;
+  }
+  if (sh >= 0 && st >= 0) {
+    Hff.block<8, 8>(sh * 8, st * 8) += pb.Hht;
+    Hff.block<8, 8>(st * 8, sh * 8) += pb.Hht.transpose();
+  }
+  ne.Hpp[i] += pb.hpp;
+  ne.bp[i] += pb.bp;
+}
+
 }  // namespace
 
 std::vector<HostPattern> PhotometricBA::hostPatterns(const std::vector<BaFrame>& frames,
@@ -240,39 +277,23 @@ double PhotometricBA::cost(const std::vector<BaFrame>& frames, const std::vector
                            const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                            const BaPrior* prior, double* rmse, int* count) const {
   const PairTransforms pairs(frames);
-  const double d = cfg_.huber;
-  struct Sums {
-    double c = 0, ss = 0;
-    int n = 0;
-  };
-  std::array<Sums, kReductionChunks> part{};
+  std::array<CostSums, kReductionChunks> part{};
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
-    Sums& s = part[chunk];
+    CostSums& s = part[chunk];
     Eigen::Matrix<double, 8, 1> r;
     for (std::size_t i = begin; i < end; ++i) {
       const BaPoint& p = points[i];
       if (p.outlier) continue;
-      if (p.prior_weight > 0) {
-        const double e = rho[i] - p.prior_inv_depth;
-        s.c += 0.5 * p.prior_weight * e * e;
-      }
-      for (int t : p.targets) {
-        if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, nullptr, gw[i].I.data())) continue;
-        for (int k = 0; k < 8; ++k) {
-          s.c += gw[i].w[k] * huberCost(r[k], d);
-          s.ss += r[k] * r[k];
-          ++s.n;
-        }
-      }
+      if (p.prior_weight > 0) s.addPointPrior(p, rho[i]);
+      for (int t : p.targets)
+        if (evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, nullptr, gw[i].I.data()))
+          s.addPattern(r, gw[i], cfg_.huber);
     }
   });
-  double c = 0, ss = 0;
-  int n = 0;
-  for (const Sums& s : part) c += s.c, ss += s.ss, n += s.n;
-  if (prior) c += prior->energy(frames);
-  if (rmse) *rmse = n ? std::sqrt(ss / n) : 0.0;
-  if (count) *count = n;
-  return c;
+  const CostSums sum = CostSums::total(part);
+  if (rmse) *rmse = sum.rmse();
+  if (count) *count = sum.n;
+  return sum.c + (prior ? prior->energy(frames) : 0.0);
 }
 
 // Adds the prior's gradient b + Hx at the current state and its Hessian blocks between free frames.
@@ -376,14 +397,20 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   std::vector<double> rho(np), rho_new(np);
   for (std::size_t i = 0; i < np; ++i) rho[i] = points[i].inv_depth;
 
-  double c = cost(frames, points, rho, gw, prior, &stats.initial_rmse, &stats.residuals);
+  // Each trial state's cost comes with its normal equations from the same residuals, so that an
+  // accepted step needs no second pass over the images; the last iteration's trial needs only its cost.
+  NormalEquations ne, ne_try;
+  CostSums sums;
+  accumulate(frames, points, rho, gw, slot, dim, ne, prior, -1, &sums);
+  double c = sums.c + (prior ? prior->energy(frames) : 0.0);
+  stats.initial_rmse = sums.rmse();
+  stats.residuals = sums.n;
   LmDamping lm(cfg_.lambda_initial, kLambdaFloor);
   StepScratch scratch{Eigen::MatrixXd(dim, dim), Eigen::VectorXd(dim), std::vector<double>(np), {}, {}};
   Eigen::VectorXd df;
-  NormalEquations ne;
   for (int it = 0; it < cfg_.iterations; ++it, ++stats.iterations) {
-    accumulate(frames, points, rho, gw, slot, dim, ne, prior);
     if (prior) addPrior(*prior, frames, slot, ne);
+    const bool last = it + 1 == cfg_.iterations;
     bool accepted = false;
     for (int tries = 0; tries < 5 && !accepted; ++tries) {
       if (!dampedStep(ne, lm.lambda(), dim, rho, scratch, df, rho_new)) {
@@ -398,10 +425,17 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         f_new[f].a += x[6];
         f_new[f].b += x[7];
       }
-      const double c_new = cost(f_new, points, rho_new, gw, prior, nullptr, nullptr);
+      double c_new;
+      if (last) {
+        c_new = cost(f_new, points, rho_new, gw, prior, nullptr, nullptr);
+      } else {
+        accumulate(f_new, points, rho_new, gw, slot, dim, ne_try, prior, -1, &sums);
+        c_new = sums.c + (prior ? prior->energy(f_new) : 0.0);
+      }
       if (c_new < c) {
         frames.swap(f_new);
         rho.swap(rho_new);
+        std::swap(ne, ne_try);
         accepted = true;
         const bool converged = c - c_new < 1e-6 * c;
         c = c_new;
@@ -422,7 +456,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
 void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
                                const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                                const std::vector<int>& slot, int dim, NormalEquations& ne,
-                               const BaPrior* prior, int only_host) const {
+                               const BaPrior* prior, int only_host, CostSums* sums) const {
   const double d = cfg_.huber;
   const PairTransforms pairs(frames);
   // Without a prior every Jacobian is taken at the current state (lin stays null).
@@ -440,6 +474,7 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
   // Per chunk: its own frame blocks (summed below in chunk order); the point columns are disjoint.
   std::vector<Eigen::MatrixXd> Hc(kReductionChunks);
   std::vector<Eigen::VectorXd> bc(kReductionChunks);
+  std::array<CostSums, kReductionChunks> part{};
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
     Eigen::MatrixXd& Hff = Hc[chunk];
     Eigen::VectorXd& bf = bc[chunk];
@@ -454,32 +489,16 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
       if (p.prior_weight > 0) {
         ne.Hpp[i] += p.prior_weight;
         ne.bp[i] += p.prior_weight * (rho[i] - p.prior_inv_depth);
+        if (sums) part[chunk].addPointPrior(p, rho[i]);
       }
       for (int t : p.targets) {
         if (!evaluateCore(frames, pairs, p.host, p.u, p.v, rho[i], t, r, &J, gw[i].I.data(),
                           fej ? &lin : nullptr))
           continue;
-        const int sh = slot[p.host], st = slot[t];
-        for (int k = 0; k < 8; ++k) {
-          w[k] = gw[i].w[k] * huberWeight(r[k], d);
-        }
+        if (sums) part[chunk].addPattern(r, gw[i], d);
+        for (int k = 0; k < 8; ++k) w[k] = gw[i].w[k] * huberWeight(r[k], d);
         pairBlocks(J, r, w, pb);
-        if (sh >= 0) {
-          Hff.block<8, 8>(sh * 8, sh * 8) += pb.Hhh;
-          bf.segment<8>(sh * 8) += pb.bh;
-          ne.Hfp.col(i).segment<8>(sh * 8) += pb.fh;
-        }
-        if (st >= 0) {
-          Hff.block<8, 8>(st * 8, st * 8) += pb.Htt;
-          bf.segment<8>(st * 8) += pb.bt;
-          ne.Hfp.col(i).segment<8>(st * 8) += pb.ft;
-        }
-        if (sh >= 0 && st >= 0) {
-          Hff.block<8, 8>(sh * 8, st * 8) += pb.Hht;
-          Hff.block<8, 8>(st * 8, sh * 8) += pb.Hht.transpose();
-        }
-        ne.Hpp[i] += pb.hpp;
-        ne.bp[i] += pb.bp;
+        addPairBlocks(pb, slot[p.host], slot[t], i, Hff, bf, ne);
       }
     }
   });
@@ -487,6 +506,7 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
     ne.Hff += Hc[c];
     ne.bf += bc[c];
   }
+  if (sums) *sums = CostSums::total(part);
 }
 
 void PhotometricBA::denseNormalEquations(const std::vector<BaFrame>& frames,
@@ -511,81 +531,6 @@ void PhotometricBA::denseNormalEquations(const std::vector<BaFrame>& frames,
     H(dim + i, dim + i) = ne.Hpp[i];
     b(dim + i) = ne.bp[i];
   }
-}
-
-BaPrior PhotometricBA::marginalize(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
-                                   const BaPrior* prior, int m) const {
-  const int F = static_cast<int>(frames.size());
-  if (m < 0 || m >= F) throw std::out_of_range("marginalize: no such frame");
-  // Every frame is a variable here (fixed or not): the prior must hold the information about all of
-  // them, whichever the window holds fixed later.
-  std::vector<int> slot(F);
-  for (int f = 0; f < F; ++f) slot[f] = f;
-  const int dim = F * kFrameParams;
-  NormalEquations ne;
-  std::vector<double> rho(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) rho[i] = points[i].inv_depth;
-  accumulate(frames, points, rho, hostPatterns(frames, points), slot, dim, ne, prior, m);
-  // The residuals are linearized at the current state, their Jacobians at the linearization point
-  // x0 (first estimates): r(x) ≈ r + J (δ − δ_now), with δ = x ⊟ x0. In terms of δ the gradient is
-  // Jᵀr − JᵀJ δ_now; δ_now is zero except for the frames the old prior already holds at their x0.
-  Eigen::VectorXd d_now = Eigen::VectorXd::Zero(dim);
-  if (prior && !prior->empty()) {
-    const Eigen::VectorXd dp = prior->delta(frames);
-    for (std::size_t i = 0; i < prior->frames.size(); ++i)
-      d_now.segment<8>(8 * prior->frames[i]) = dp.segment<8>(8 * i);
-  }
-  ne.bf.noalias() -= ne.Hff * d_now;
-  for (std::size_t i = 0; i < points.size(); ++i)
-    ne.bp[i] -= ne.Hfp.col(static_cast<Eigen::Index>(i)).dot(d_now);
-  Eigen::MatrixXd H = ne.Hff;
-  Eigen::VectorXd b = ne.bf;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (ne.Hpp[i] <= 1e-12) continue;
-    const auto col = ne.Hfp.col(static_cast<Eigen::Index>(i));
-    H.noalias() -= col * col.transpose() / ne.Hpp[i];
-    b.noalias() -= col * (ne.bp[i] / ne.Hpp[i]);
-  }
-  // The old prior joins as it is: same variables, same linearization points (never relinearized).
-  std::vector<int> in_prior(F, -1);
-  if (prior && !prior->empty()) {
-    const int np = static_cast<int>(prior->frames.size());
-    for (int i = 0; i < np; ++i) {
-      const int si = prior->frames[i];
-      in_prior[si] = i;
-      b.segment<8>(si * 8) += prior->b.segment<8>(8 * i);
-      for (int j = 0; j < np; ++j)
-        H.block<8, 8>(si * 8, prior->frames[j] * 8) += prior->H.block<8, 8>(8 * i, 8 * j);
-    }
-  }
-  // Schur complement of frame m: its block is regularized slightly so that a frame seen by few
-  // residuals (or a gauge direction) does not blow up the inverse.
-  std::vector<int> keep;
-  for (int f = 0; f < F; ++f)
-    if (f != m) keep.push_back(f);
-  const int nk = static_cast<int>(keep.size());
-  Eigen::MatrixXd Hkk(8 * nk, 8 * nk), Hkm(8 * nk, 8);
-  Eigen::VectorXd bk(8 * nk);
-  for (int i = 0; i < nk; ++i) {
-    bk.segment<8>(8 * i) = b.segment<8>(8 * keep[i]);
-    Hkm.block<8, 8>(8 * i, 0) = H.block<8, 8>(8 * keep[i], 8 * m);
-    for (int j = 0; j < nk; ++j) Hkk.block<8, 8>(8 * i, 8 * j) = H.block<8, 8>(8 * keep[i], 8 * keep[j]);
-  }
-  Eigen::Matrix<double, 8, 8> Hmm = H.block<8, 8>(8 * m, 8 * m);
-  Hmm.diagonal().array() += 1e-9 + 1e-6 * Hmm.diagonal().array();
-  const Eigen::LDLT<Eigen::Matrix<double, 8, 8>> ldlt(Hmm);
-  BaPrior out;
-  out.frames = keep;
-  out.H = Hkk - Hkm * ldlt.solve(Hkm.transpose());
-  out.H = 0.5 * (out.H + out.H.transpose());
-  out.b = bk - Hkm * ldlt.solve(b.segment<8>(8 * m));
-  for (int f : keep) {
-    const int i = in_prior[f];
-    out.T0.push_back(i >= 0 ? prior->T0[i] : frames[f].T_w_c);
-    out.a0.push_back(i >= 0 ? prior->a0[i] : frames[f].a);
-    out.b0.push_back(i >= 0 ? prior->b0[i] : frames[f].b);
-  }
-  return out;
 }
 
 }  // namespace eds

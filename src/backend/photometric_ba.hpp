@@ -77,6 +77,7 @@ struct BaStats {
 };
 
 struct NormalEquations;     // defined in photometric_ba.cpp
+struct CostSums;            // defined in photometric_ba.cpp
 struct PairTransforms;      // defined in photometric_ba.cpp
 struct LinearizationState;  // defined in photometric_ba.cpp
 
@@ -130,11 +131,12 @@ class PhotometricBA {
               double* rmse, int* count) const;
   // Accumulates the normal equations of the photometric terms (and point priors); frames with
   // slot < 0 are constant. only_host >= 0: only the points hosted in that frame. Jacobians of the
-  // frames `prior` holds are taken at its linearization point.
+  // frames `prior` holds are taken at its linearization point. sums: also the cost of these terms,
+  // as cost() adds it, from the same residuals.
   void accumulate(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
                   const std::vector<double>& rho, const std::vector<HostPattern>& gw,
                   const std::vector<int>& slot, int dim, NormalEquations& ne, const BaPrior* prior,
-                  int only_host = -1) const;
+                  int only_host = -1, CostSums* sums = nullptr) const;
 
   struct StepScratch {  // reused across the damped steps of one optimize()
     Eigen::MatrixXd S;
