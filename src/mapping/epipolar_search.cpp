@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "core/image_sampling.hpp"
@@ -31,6 +32,8 @@ class LineSearch {
     R_ = T_r_h.rotationMatrix();
     t_ = T_r_h.translation();
     e_ = std::exp(ref.a - host.a);
+    row_ = static_cast<std::ptrdiff_t>(Ir_.step1());
+    for (int k = 0; k < 8; ++k) tap_[k] = kPattern[k][1] * row_ + kPattern[k][0];
   }
 
   // E: scratch of cfg.max_samples energies.
@@ -48,9 +51,17 @@ class LineSearch {
   double energy(const Vec3& Rx, const std::array<double, 8>& ref_val, double rho) const {
     double u, v;
     if (!proj(Rx, rho, u, v) || !inside(u, v)) return std::numeric_limits<double>::infinity();
+    // The pattern's offsets are whole pixels, so every tap has the centre's bilinear fractions: this
+    // is the scan's inner loop.
+    const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+    const float ax = static_cast<float>(u - x0), ay = static_cast<float>(v - y0);
+    const float* c = Ir_.ptr<float>(y0) + x0;
     double E = 0;
     for (int k = 0; k < 8; ++k) {
-      const double r = sampleBilinear(Ir_, u + kPattern[k][0], v + kPattern[k][1]) - ref_val[k];
+      const float* r0 = c + tap_[k];
+      const float* r1 = r0 + row_;
+      const float I = (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+      const double r = I - ref_val[k];
       E += r * r;
     }
     return E;
@@ -65,6 +76,8 @@ class LineSearch {
   Mat3 R_;
   Vec3 t_;
   double e_ = 1;
+  std::ptrdiff_t row_ = 0;               // floats per image row
+  std::array<std::ptrdiff_t, 8> tap_{};  // each pattern pixel's offset from the centre, in floats
 };
 
 EpipolarMatch LineSearch::match(const cv::Point& p, std::vector<double>& E) const {
