@@ -403,6 +403,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   CostSums sums;
   accumulate(frames, points, rho, gw, slot, dim, ne, prior, -1, &sums);
   double c = sums.c + (prior ? prior->energy(frames) : 0.0);
+  stats.initial_cost = c;
   stats.initial_rmse = sums.rmse();
   stats.residuals = sums.n;
   LmDamping lm(cfg_.lambda_initial, kLambdaFloor);

@@ -72,6 +72,7 @@ struct BaPrior {
 struct BaStats {
   int iterations = 0;
   double initial_rmse = 0, final_rmse = 0;  // over inlier residuals, intensity units
+  double initial_cost = 0;  // the energy minimized (weighted Huber norm, prior included) at the start
   int residuals = 0;
   int outliers_removed = 0;
 };

@@ -91,9 +91,10 @@ class EventFrontend {
   // lost-track check fails (the estimate follows the solve; `failure` says why).
   std::optional<SE3> track(const EventFrame& ef, const SE3* prior, std::string* failure = nullptr);
   // An event frame between two frames already tracked (T_w_a at t_a, T_w_b at t_b; the buffered event
-  // frames of the bootstrap): it starts from the frames' geodesic interpolation, which is also its
-  // motion prior (frames at most motion_prior.max_gap_s apart), with the σ of an interpolation under
-  // bounded acceleration, σ0 + ½ a (t−t_a)(t_b−t).
+  // frames of the bootstrap): it starts from the previous event frame's pose when that lies between
+  // the same frames, else from their geodesic interpolation, which is also its motion prior (frames
+  // at most motion_prior.max_gap_s apart), with the σ of an interpolation under bounded acceleration,
+  // σ0 + ½ a (t−t_a)(t_b−t).
   std::optional<SE3> trackBetween(const EventFrame& ef, TimeNs t_a, const SE3& T_w_a, TimeNs t_b,
                                   const SE3& T_w_b, std::string* failure = nullptr);
   // A better pose at time t (a tracked frame): the next event frame starts from it, and the last two

@@ -5,6 +5,7 @@
 
 #include "backend/photometric_ba.hpp"
 #include "core/image_sampling.hpp"
+#include "core/robust.hpp"
 #include "frontend/frame_tracker.hpp"
 #include "frontend/point_selection.hpp"
 #include "map/keyframe.hpp"
@@ -186,6 +187,43 @@ TEST(PhotometricBA, NormalEquationsAreTheJacobiansGram) {
   EXPECT_LT((g.tail(n - 8 * F) - gn.tail(n - 8 * F)).norm(), 1e-9 * (1.0 + gn.norm()));
   std::printf("[ BA normal equations ] %d pairs, worst |H - JᵀJ| %.2e of %.2e\n", pairs,
               (H - Hn).cwiseAbs().maxCoeff(), scale);
+}
+
+// The energy the solver minimizes: every pattern residual's Huber norm, weighted by the host's
+// gradient, c² / (c² + |∇I_h|²), summed here pixel by pixel from evaluate().
+TEST(PhotometricBA, InitialCostIsTheGradientWeightedHuberEnergy) {
+  const Scene& s = scene();
+  const int F = 3;
+  std::vector<BaFrame> frames = framesAtTruth(s, F);
+  std::mt19937 rng(9);
+  std::vector<BaPoint> pts;
+  for (int host = 0; host < F; ++host) {
+    const std::vector<BaPoint> p = pointsOf(s, host, 0.1, rng, F);
+    pts.insert(pts.end(), p.begin(), p.end());
+  }
+  BaConfig cfg;
+  cfg.iterations = 1;
+  const PhotometricBA ba(camera(), cfg);
+  constexpr int kDsoPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
+  const double c2 = cfg.grad_weight_c * cfg.grad_weight_c;
+  double energy = 0, unweighted = 0;
+  for (const BaPoint& p : pts)
+    for (int t : p.targets) {
+      Eigen::Matrix<double, 8, 1> r;
+      if (!ba.evaluate(frames, p, t, r, nullptr)) continue;
+      for (int k = 0; k < 8; ++k) {
+        double gx, gy;
+        sampleBilinear(frames[p.host].image, p.u + kDsoPattern[k][0], p.v + kDsoPattern[k][1], gx, gy);
+        energy += c2 / (c2 + gx * gx + gy * gy) * huberCost(r[k], cfg.huber);
+        unweighted += huberCost(r[k], cfg.huber);
+      }
+    }
+  ASSERT_GT(energy, 0);
+  ASSERT_GT(unweighted, 1.05 * energy);  // the weights matter on this scene
+  std::vector<BaFrame> f = frames;
+  const BaStats st = ba.optimize(f, pts);
+  EXPECT_NEAR(st.initial_cost, energy, 1e-9 * energy);
+  std::printf("[ BA energy ] %.6g (unweighted %.6g)\n", energy, unweighted);
 }
 
 // The residual itself: with both frames at one pose and one image, the geometry cancels and only the
