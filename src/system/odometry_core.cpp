@@ -217,14 +217,16 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   if (!cfg_.use_events) return;
   events_->setReference(ref, SE3());
   trackBufferedEvents(boot_traj);
-  odo_->adoptReference(true);
-  syncReference();
   buffered_.clear();
   buffered_min_dt_ = 0;
   // The bootstrap's last two frames start the motion prior (and the tracking) of the live events.
+  // Before the new keyframe is adopted: a threaded back-end returns it optimized, in a world moved
+  // from the frames' poses, and adopting it moves those poses along (they would pull the events away).
   const std::size_t n = res_.frames.size();
   if (n >= 2) events_->correct(res_.frames[n - 2].t, res_.frames[n - 2].T_w_c);
   if (n >= 1) events_->correct(res_.frames[n - 1].t, res_.frames[n - 1].T_w_c);
+  odo_->adoptReference(true);
+  syncReference();
 }
 
 // A buffered event pose may move from the last accepted one at most this many times faster than the
