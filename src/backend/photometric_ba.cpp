@@ -35,10 +35,15 @@ struct PairTransforms {
   int F = 0;
   std::vector<SE3> T_t_h;
   std::vector<Mat3> R_t_h, R_t_w;
-  std::vector<double> e;  // e^{a_t − a_h}
+  std::vector<double> e;    // e^{a_t − a_h}
+  std::vector<Mat3> R_w_c;  // per frame
+  std::vector<Vec3> t_w_c;
   explicit PairTransforms(const std::vector<BaFrame>& frames) : F(static_cast<int>(frames.size())) {
     T_t_h.resize(F * F), R_t_h.resize(F * F), R_t_w.resize(F * F), e.resize(F * F);
+    R_w_c.resize(F), t_w_c.resize(F);
     for (int t = 0; t < F; ++t) {
+      R_w_c[t] = frames[t].T_w_c.rotationMatrix();
+      t_w_c[t] = frames[t].T_w_c.translation();
       const SE3 T_t_w = frames[t].T_w_c.inverse();
       const Mat3 Rtw = T_t_w.rotationMatrix();
       for (int h = 0; h < F; ++h) {
@@ -50,6 +55,15 @@ struct PairTransforms {
       }
     }
   }
+};
+
+// One (point, target) pair's Jacobian, compactly: the host's columns are [A, e] and the target's [-A, -1]
+// (A: pose and a_h, e = e^{a_t − a_h} on every row; the brightness offsets enter linearly), then the
+// inverse depth's.
+struct PairJacobian {
+  Eigen::Matrix<double, 8, 7> A;
+  double e = 1;
+  Eigen::Matrix<double, 8, 1> d_rho;
 };
 
 // The frames as their Jacobians are evaluated (DSO's first-estimate Jacobians): frames the prior holds
@@ -72,7 +86,7 @@ std::vector<BaFrame> linearizationFrames(const std::vector<BaFrame>& frames, con
 
 bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host,
                                  float u, float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
-                                 Eigen::Matrix<double, 8, 17>* J, const double* host_values,
+                                 PairJacobian* J, const double* host_values,
                                  const LinearizationState* lin) const {
   const BaFrame& H = frames[host];
   const BaFrame& T = frames[target];
@@ -81,11 +95,24 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
   const Mat3& R_t_h = pairs.R_t_h[pi];
   const double e = pairs.e[pi];
   const int W = H.image.cols, Hh = H.image.rows;
-  // A pattern pixel's ray is the centre's plus (δu/fx, δv/fy, 0), so its point in the target follows
-  // from the centre's through two columns of R_t_h: no division per pixel.
+  // A pattern pixel's ray is the centre's plus (δu/fx, δv/fy, 0), so its point in the target (and in
+  // the world, for the Jacobian) follows from the centre's through two columns of a rotation: no
+  // division and no rotation per pixel.
   const double inv_rho = 1.0 / rho;
   const Vec3 x_c = cam_.pinholeRay(u, v);
   const Vec3 Rx_c = R_t_h * x_c, R_du = R_t_h.col(0) / cam_.fx, R_dv = R_t_h.col(1) / cam_.fy;
+  // First-estimate Jacobians: the geometry (projection, frame poses, brightness) at the frames'
+  // linearization points; only the image gradient is taken at the current projection.
+  const PairTransforms& G = lin ? *lin->pairs : pairs;
+  const BaFrame& Hg = lin ? (*lin->frames)[host] : H;
+  const double eg = G.e[pi];
+  Vec3 Gx_c = Vec3::Zero(), G_du = Gx_c, G_dv = Gx_c, Wx_c = Gx_c, W_du = Gx_c, W_dv = Gx_c;
+  if (J) {
+    const Mat3& Rg = G.R_t_h[pi];
+    Gx_c = Rg * x_c, G_du = Rg.col(0) / cam_.fx, G_dv = Rg.col(1) / cam_.fy;
+    const Mat3& Rw = G.R_w_c[host];
+    Wx_c = Rw * x_c, W_du = Rw.col(0) / cam_.fx, W_dv = Rw.col(1) / cam_.fy;
+  }
   for (int k = 0; k < 8; ++k) {
     const double uk = u + kPattern[k][0], vk = v + kPattern[k][1];
     if (uk < 0 || vk < 0 || uk >= W - 1 || vk >= Hh - 1) return false;
@@ -98,34 +125,23 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
     double dx, dy;
     const double I_t = sampleBilinear(T.image, ut, vt, dx, dy);
     r[k] = I_t - T.b - e * (I_h - H.b);
-    if (J) {
-      // First-estimate Jacobians: the geometry (projection, frame poses, brightness) at the frames'
-      // linearization points; only the image gradient is taken at the current projection.
-      const Vec3 x_h = cam_.pinholeRay(uk, vk);
-      const Vec3 X_h = x_h * inv_rho;
-      const PairTransforms& G = lin ? *lin->pairs : pairs;
-      const BaFrame& Hg = lin ? (*lin->frames)[host] : H;
-      const Vec3 X_g = lin ? Vec3(G.R_t_h[pi] * X_h + G.T_t_h[pi].translation()) : X_t;
-      const double izg = !lin ? iz : X_g.z() > 1e-6 ? 1.0 / X_g.z() : iz;
-      const double eg = G.e[pi];
-      const Eigen::RowVector3d dI_dX(dx * cam_.fx * izg, dy * cam_.fy * izg,
-                                     -(dx * cam_.fx * X_g.x() + dy * cam_.fy * X_g.y()) * izg * izg);
-      const Eigen::RowVector3d g = dI_dX * G.R_t_w[pi];
-      const Vec3 X_w = Hg.T_w_c * X_h;
-      // X_t = T_w_t^-1 X_w: a left perturbation of the target moves X_t by -R_t_w (δv + δω x X_w),
-      // one of the host moves X_w by (δv + δω x X_w).
-      const Eigen::RowVector3d gx = X_w.cross(g.transpose()).transpose();
-      J->block<1, 3>(k, 0) = g;
-      J->block<1, 3>(k, 3) = gx;
-      (*J)(k, 6) = eg * (I_h - Hg.b);
-      (*J)(k, 7) = eg;
-      J->block<1, 3>(k, 8) = -g;
-      J->block<1, 3>(k, 11) = -gx;
-      (*J)(k, 14) = -eg * (I_h - Hg.b);
-      (*J)(k, 15) = -1.0;
-      (*J)(k, 16) = dI_dX * (G.R_t_h[pi] * (-x_h / (rho * rho)));
-    }
+    if (!J) continue;
+    const Vec3 RX_g = Gx_c + kPattern[k][0] * G_du + kPattern[k][1] * G_dv;  // R_t_h x_h (linearized)
+    const Vec3 X_g = lin ? Vec3(RX_g * inv_rho + G.T_t_h[pi].translation()) : X_t;
+    const double izg = !lin ? iz : X_g.z() > 1e-6 ? 1.0 / X_g.z() : iz;
+    const Eigen::RowVector3d dI_dX(dx * cam_.fx * izg, dy * cam_.fy * izg,
+                                   -(dx * cam_.fx * X_g.x() + dy * cam_.fy * X_g.y()) * izg * izg);
+    const Eigen::RowVector3d g = dI_dX * G.R_t_w[pi];
+    const Vec3 X_w = (Wx_c + kPattern[k][0] * W_du + kPattern[k][1] * W_dv) * inv_rho + G.t_w_c[host];
+    // X_t = T_w_t^-1 X_w: a left perturbation of the target moves X_t by -R_t_w (δv + δω x X_w),
+    // one of the host moves X_w by (δv + δω x X_w).
+    J->A.block<1, 3>(k, 0) = g;
+    J->A.block<1, 3>(k, 3) = X_w.cross(g.transpose()).transpose();
+    J->A(k, 6) = eg * (I_h - Hg.b);
+    // X_g = R_t_h x_h / ρ + t_t_h.
+    J->d_rho[k] = -dI_dX.dot(RX_g.transpose()) * (inv_rho * inv_rho);
   }
+  if (J) J->e = eg;
   return true;
 }
 
@@ -134,7 +150,19 @@ bool PhotometricBA::evaluate(const std::vector<BaFrame>& frames, const BaPoint& 
   if (p.host < 0 || p.host >= static_cast<int>(frames.size()) || target < 0 ||
       target >= static_cast<int>(frames.size()))
     throw std::out_of_range("photometric BA: frame index out of range");
-  return evaluateCore(frames, PairTransforms(frames), p.host, p.u, p.v, p.inv_depth, target, r, J);
+  PairJacobian Jc;
+  if (!evaluateCore(frames, PairTransforms(frames), p.host, p.u, p.v, p.inv_depth, target, r,
+                    J ? &Jc : nullptr))
+    return false;
+  if (J) {
+    // Host [A, e], target [-A, -1] (see PairJacobian), inverse depth last.
+    J->leftCols<7>() = Jc.A;
+    J->col(7).setConstant(Jc.e);
+    J->middleCols<7>(8) = -Jc.A;
+    J->col(15).setConstant(-1.0);
+    J->col(16) = Jc.d_rho;
+  }
+  return true;
 }
 
 std::vector<double> PhotometricBA::patternRms(const std::vector<BaFrame>& frames,
@@ -183,69 +211,76 @@ struct CostSums {
 
 namespace {
 
-// One (point, target) pair's share of JᵀWJ and JᵀWr. Its Jacobian (evaluateCore) has host columns
-// [A, e] and target columns [-A, -1], with A the 7 columns of pose and a_h and e = e^{a_t − a_h} on every
-// row, so all the blocks come from one Gram matrix of [A, 1, r, ∂r/∂ρ] (DSO's trick): one small
-// product instead of three 8×8 ones.
-struct PairBlocks {
-  Eigen::Matrix<double, 8, 8> Hhh, Htt, Hht;
-  Eigen::Matrix<double, 8, 1> bh, bt, fh, ft;  // Jᵀ W r and Jᵀ W ∂r/∂ρ of host and target
-  double hpp = 0, bp = 0;
+// A (host, target) frame pair's share of JᵀWJ and JᵀWr. Its residuals' Jacobians (PairJacobian) have
+// host columns [A, e] and target columns [-A, -1] with one e for the whole pair, so the three 8×8 blocks
+// and both gradients follow from the sums of [A, 1]ᵀW[A, 1] and [A, 1]ᵀWr over its residuals (DSO's
+// trick): they are expanded once per pair, not once per residual.
+struct PairSums {
+  Eigen::Matrix<double, 8, 8> S = Eigen::Matrix<double, 8, 8>::Zero();
+  Eigen::Matrix<double, 8, 1> v = Eigen::Matrix<double, 8, 1>::Zero();
+  double e = 1;
+  bool used = false;
+  PairSums& operator+=(const PairSums& o) {
+    if (!o.used) return *this;
+    S += o.S, v += o.v, e = o.e, used = true;
+    return *this;
+  }
 };
 
-void pairBlocks(const Eigen::Matrix<double, 8, 17>& J, const Eigen::Matrix<double, 8, 1>& r,
-                const Eigen::Matrix<double, 8, 1>& w, PairBlocks& out) {
+// One (point, target) residual pair: the Gram matrix of [A, 1, r, ∂r/∂ρ]; its frame part goes to the
+// pair's sums, its point part (the point's column of Hfp, Hpp, bp) straight to the normal equations.
+// sh, st: the slots of host and target (< 0: constant frame).
+void addResiduals(const PairJacobian& J, const Eigen::Matrix<double, 8, 1>& r,
+                  const Eigen::Matrix<double, 8, 1>& w, int sh, int st, Eigen::Index i, PairSums& ps,
+                  NormalEquations& ne) {
   Eigen::Matrix<double, 8, 10> B;
-  B.leftCols<7>() = J.leftCols<7>();
+  B.leftCols<7>() = J.A;
   B.col(7).setOnes();
   B.col(8) = r;
-  B.col(9) = J.col(16);
+  B.col(9) = J.d_rho;
   const Eigen::Matrix<double, 8, 10> WB = w.asDiagonal() * B;
   const Eigen::Matrix<double, 10, 10> G = B.transpose().lazyProduct(WB);
-  const double e = J(0, 7);
-  const auto AA = G.topLeftCorner<7, 7>();
-  const auto A1 = G.block<7, 1>(0, 7);
-  const double s11 = G(7, 7);
-  out.Htt.topLeftCorner<7, 7>() = AA;
-  out.Htt.block<7, 1>(0, 7) = A1;
-  out.Htt.block<1, 7>(7, 0) = A1.transpose();
-  out.Htt(7, 7) = s11;
-  out.Hhh.topLeftCorner<7, 7>() = AA;
-  out.Hhh.block<7, 1>(0, 7) = e * A1;
-  out.Hhh.block<1, 7>(7, 0) = e * A1.transpose();
-  out.Hhh(7, 7) = e * e * s11;
-  out.Hht.topLeftCorner<7, 7>() = -AA;
-  out.Hht.block<7, 1>(0, 7) = -A1;
-  out.Hht.block<1, 7>(7, 0) = -e * A1.transpose();
-  out.Hht(7, 7) = -e * s11;
-  out.bh << G.block<7, 1>(0, 8), e * G(7, 8);
-  out.bt << -G.block<7, 1>(0, 8), -G(7, 8);
-  out.fh << G.block<7, 1>(0, 9), e * G(7, 9);
-  out.ft << -G.block<7, 1>(0, 9), -G(7, 9);
-  out.hpp = G(9, 9);
-  out.bp = G(9, 8);
+  ps.S += G.topLeftCorner<8, 8>();
+  ps.v += G.block<8, 1>(0, 8);
+  ps.e = J.e;
+  ps.used = true;
+  if (sh >= 0) {
+    ne.Hfp.col(i).segment<7>(sh * 8) += G.block<7, 1>(0, 9);
+    ne.Hfp(sh * 8 + 7, i) += J.e * G(7, 9);
+  }
+  if (st >= 0) ne.Hfp.col(i).segment<8>(st * 8) -= G.block<8, 1>(0, 9);
+  ne.Hpp[i] += G(9, 9);
+  ne.bp[i] += G(9, 8);
 }
 
-// Adds one pair's blocks to a chunk's frame blocks and to the point's column and diagonal; sh, st:
-// the slots of host and target (< 0: constant frame).
-void addPairBlocks(const PairBlocks& pb, int sh, int st, Eigen::Index i, Eigen::MatrixXd& Hff,
-                   Eigen::VectorXd& bf, NormalEquations& ne) {
+// A pair's sums into the frame blocks.
+void addPairSums(const PairSums& ps, int sh, int st, NormalEquations& ne) {
+  const auto AA = ps.S.topLeftCorner<7, 7>();
+  const auto A1 = ps.S.block<7, 1>(0, 7);
+  const double s11 = ps.S(7, 7), e = ps.e;
   if (sh >= 0) {
-    Hff.block<8, 8>(sh * 8, sh * 8) += pb.Hhh;
-    bf.segment<8>(sh * 8) += pb.bh;
-    ne.Hfp.col(i).segment<8>(sh * 8) += pb.fh;
+    auto Hhh = ne.Hff.block<8, 8>(sh * 8, sh * 8);
+    Hhh.topLeftCorner<7, 7>() += AA;
+    Hhh.block<7, 1>(0, 7) += e * A1;
+    Hhh.block<1, 7>(7, 0) += e * A1.transpose();
+    Hhh(7, 7) += e * e * s11;
+    ne.bf.segment<7>(sh * 8) += ps.v.head<7>();
+    ne.bf(sh * 8 + 7) += e * ps.v(7);
   }
   if (st >= 0) {
-    Hff.block<8, 8>(st * 8, st * 8) += pb.Htt;
-    bf.segment<8>(st * 8) += pb.bt;
-    ne.Hfp.col(i).segment<8>(st * 8) += pb.ft;
+    auto Htt = ne.Hff.block<8, 8>(st * 8, st * 8);
+    Htt += ps.S;
+    ne.bf.segment<8>(st * 8) -= ps.v;
   }
   if (sh >= 0 && st >= 0) {
-    Hff.block<8, 8>(sh * 8, st * 8) += pb.Hht;
-    Hff.block<8, 8>(st * 8, sh * 8) += pb.Hht.transpose();
+    Eigen::Matrix<double, 8, 8> Hht;
+    Hht.topLeftCorner<7, 7>() = -AA;
+    Hht.block<7, 1>(0, 7) = -A1;
+    Hht.block<1, 7>(7, 0) = -e * A1.transpose();
+    Hht(7, 7) = -e * s11;
+    ne.Hff.block<8, 8>(sh * 8, st * 8) += Hht;
+    ne.Hff.block<8, 8>(st * 8, sh * 8) += Hht.transpose();
   }
-  ne.Hpp[i] += pb.hpp;
-  ne.bp[i] += pb.bp;
 }
 
 }  // namespace
@@ -472,18 +507,16 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
   ne.Hpp.assign(points.size(), 0.0);
   ne.bp.assign(points.size(), 0.0);
   ne.Hfp.setZero(dim, np);
-  // Per chunk: its own frame blocks (summed below in chunk order); the point columns are disjoint.
-  std::vector<Eigen::MatrixXd> Hc(kReductionChunks);
-  std::vector<Eigen::VectorXd> bc(kReductionChunks);
+  // Per chunk: its own sums of every frame pair (added below in chunk order, then expanded into the
+  // frame blocks); the point columns are disjoint.
+  const int F = pairs.F;
+  std::vector<std::vector<PairSums>> pc(kReductionChunks);
   std::array<CostSums, kReductionChunks> part{};
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
-    Eigen::MatrixXd& Hff = Hc[chunk];
-    Eigen::VectorXd& bf = bc[chunk];
-    Hff.setZero(dim, dim);
-    bf.setZero(dim);
+    std::vector<PairSums>& ps = pc[chunk];
+    ps.assign(static_cast<std::size_t>(F) * F, PairSums{});
     Eigen::Matrix<double, 8, 1> r, w;
-    Eigen::Matrix<double, 8, 17> J;
-    PairBlocks pb;
+    PairJacobian J;
     for (auto i = static_cast<Eigen::Index>(begin); i < static_cast<Eigen::Index>(end); ++i) {
       const BaPoint& p = points[i];
       if (p.outlier || (only_host >= 0 && p.host != only_host)) continue;
@@ -498,14 +531,15 @@ void PhotometricBA::accumulate(const std::vector<BaFrame>& frames, const std::ve
           continue;
         if (sums) part[chunk].addPattern(r, gw[i], d);
         for (int k = 0; k < 8; ++k) w[k] = gw[i].w[k] * huberWeight(r[k], d);
-        pairBlocks(J, r, w, pb);
-        addPairBlocks(pb, slot[p.host], slot[t], i, Hff, bf, ne);
+        addResiduals(J, r, w, slot[p.host], slot[t], i, ps[p.host * F + t], ne);
       }
     }
   });
-  for (int c = 0; c < kReductionChunks; ++c) {
-    ne.Hff += Hc[c];
-    ne.bf += bc[c];
+  for (int pi = 0; pi < F * F; ++pi) {
+    PairSums total;
+    for (int c = 0; c < kReductionChunks; ++c)
+      if (!pc[c].empty()) total += pc[c][pi];
+    if (total.used) addPairSums(total, slot[pi / F], slot[pi % F], ne);
   }
   if (sums) *sums = CostSums::total(part);
 }

@@ -81,6 +81,7 @@ struct NormalEquations;     // defined in photometric_ba.cpp
 struct CostSums;            // defined in photometric_ba.cpp
 struct PairTransforms;      // defined in photometric_ba.cpp
 struct LinearizationState;  // defined in photometric_ba.cpp
+struct PairJacobian;        // defined in photometric_ba.cpp
 
 // Per point: the gradient weight c²/(c²+|∇I|²) and the host intensity of each pattern pixel (both
 // constant during a solve).
@@ -122,9 +123,8 @@ class PhotometricBA {
   // The residuals of one point in one target at inverse depth rho (evaluate() without the point).
   // host_values: the 8 host intensities (HostPattern::I), or null to sample them.
   bool evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host, float u,
-                    float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
-                    Eigen::Matrix<double, 8, 17>* J, const double* host_values = nullptr,
-                    const LinearizationState* lin = nullptr) const;
+                    float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r, PairJacobian* J,
+                    const double* host_values = nullptr, const LinearizationState* lin = nullptr) const;
   std::vector<HostPattern> hostPatterns(const std::vector<BaFrame>& frames,
                                         const std::vector<BaPoint>& points) const;
   double cost(const std::vector<BaFrame>& frames, const std::vector<BaPoint>& points,
