@@ -130,6 +130,10 @@ struct OdometryConfig {
   // Memory for those event frames: beyond it they are thinned to twice their mean spacing (evenly, so
   // that their poses still span the bootstrap), which bounds the memory of a long bootstrap at any size.
   double buffered_max_mb = 128;
+  // Event frames up to this long before the bootstrap's reference are kept too, and tracked backwards
+  // from it once the map exists: a restarted bootstrap leaves the time before its new reference
+  // without a frame in the map (0: none).
+  double buffered_before_reference_s = 1.0;
   // The refined event-rate positions (trajectory_events.txt): a local quadratic fit over ±this many
   // seconds (system/trajectory_smoothing.hpp; 0: as composed). The live poses are never smoothed.
   double event_smoothing_s = 0.1;
@@ -146,8 +150,8 @@ struct OdometryConfig {
 EDS_FIELDS(OdometryConfig, stream, frame_quality, deblur, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, frame_cv_min_distance, mapping, backend, policy, threaded_backend,
            wait_for_keyframe, use_events, flicker_filter, event_frame, events, buffered_gate_translation,
-           buffered_gate_rotation_deg, buffered_max_mb, event_smoothing_s, event_anchor_max_interval_s,
-           event_anchor_max_gap_s, recovery, frame_rate, start_s, duration_s)
+           buffered_gate_rotation_deg, buffered_max_mb, buffered_before_reference_s, event_smoothing_s,
+           event_anchor_max_interval_s, event_anchor_max_gap_s, recovery, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;

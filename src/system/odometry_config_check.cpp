@@ -19,6 +19,9 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
   if (!(cfg.buffered_max_mb > 0))
     throw std::invalid_argument("Odometry: buffered_max_mb must be > 0, got " +
                                 std::to_string(cfg.buffered_max_mb));
+  if (!(cfg.buffered_before_reference_s >= 0))
+    throw std::invalid_argument("Odometry: buffered_before_reference_s must not be negative, got " +
+                                std::to_string(cfg.buffered_before_reference_s));
   if (!(cfg.frame_cv_min_distance >= 0) || !(cfg.frame_tracker.min_step >= 0) ||
       !(cfg.bootstrap.tracker.min_step >= 0))
     throw std::invalid_argument(

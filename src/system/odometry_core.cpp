@@ -152,10 +152,11 @@ void OdometryCore::eventFrame(const EventFrame& ef) {
   const ScopedStage stage(&clock_, Stage::kEventTracking);
   ++res_.event_frames;
   if (!initialized_) {
-    // Kept until the map exists, then tracked (poses from the bootstrap's reference frame on: older
-    // ones are dropped at once, which bounds the buffer by the bootstrap's span). In half precision:
+    // Kept until the map exists, then tracked (from buffered_before_reference_s before the bootstrap's
+    // reference frame on: older ones are dropped at once, which bounds the buffer by the bootstrap's
+    // span plus that). In half precision:
     // a second of them at 640x480 is 60 MB so (the values have unit norm; 11 bits suffice).
-    pruneBuffered();
+    pruneBuffered(ef.t);
     if (buffered_.empty() || ef.t - buffered_.back().t >= buffered_min_dt_) {
       buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
       ef.delta.convertTo(buffered_.back().delta, CV_16F);
@@ -215,6 +216,7 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   frame_ok_.push_back(1);
   res_.tracked += boot_traj.size();
   if (!cfg_.use_events) return;
+  trackEventsBeforeReference(ref, boot_traj);
   events_->setReference(ref, SE3());
   trackBufferedEvents(boot_traj);
   buffered_.clear();
@@ -271,6 +273,54 @@ void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
         },
         between ? std::make_pair(&*(it - 1), &*it) : std::pair<const StampedPose*, const StampedPose*>{});
     if (res_.events.size() > n_before) last = res_.events.back();
+  }
+}
+
+// The event frames buffered before the bootstrap's reference, tracked backwards from it (each from
+// the next one's pose) by an event front-end of their own. No frames bracket them: a pose that moves
+// from the last accepted one faster than kMaxSpeedup times the bootstrap frames' mean speed is a wrong
+// minimum, and the pass ends after kMaxRejected of them in a row. Their poses go before all others.
+void OdometryCore::trackEventsBeforeReference(const Keyframe& ref, const Trajectory& boot_traj) {
+  constexpr int kMaxRejected = 3;
+  const TimeNs t_ref = boot_traj.front().t;
+  if (boot_traj.size() < 2 || buffered_.empty() || buffered_.front().t >= t_ref) return;
+  const ScopedStage stage(&clock_, Stage::kEventTracking);
+  EventFrontend back(und_.pinhole(), cfg_.events);
+  back.setReference(ref, SE3());
+  const SE3 move = boot_traj.front().T_w_c.inverse() * boot_traj.back().T_w_c;
+  const double speed_t = move.translation().norm() / toSeconds(boot_traj.back().t - t_ref);
+  const double speed_r = move.so3().angle() / toSeconds(boot_traj.back().t - t_ref);
+  StampedPose last = boot_traj.front();
+  Trajectory poses;
+  std::vector<TimeNs> last_t;
+  EventFrame ef;
+  int rejected = 0;
+  for (auto it = buffered_.rbegin(); it != buffered_.rend() && rejected < kMaxRejected; ++it) {
+    if (it->t >= t_ref) continue;
+    ef.t = it->t, ef.t_first = it->t_first, ef.t_last = it->t_last;
+    it->delta.convertTo(ef.delta, CV_32F);
+    std::string why;
+    const std::optional<SE3> T = back.track(ef, nullptr, &why);
+    const SE3 s = T ? last.T_w_c.inverse() * *T : SE3();
+    const double dt = kMaxSpeedup * toSeconds(last.t - ef.t);
+    if (T && (s.translation().norm() > dt * speed_t + cfg_.buffered_gate_translation ||
+              s.so3().angle() > dt * speed_r + cfg_.buffered_gate_rotation_deg * M_PI / 180.0))
+      why = "faster than the frames after it";
+    if (!why.empty()) {
+      res_.failures.push_back({ef.t, "event frame before the bootstrap's reference: " + why});
+      ++rejected;
+      continue;
+    }
+    rejected = 0;
+    last = {ef.t, *T};
+    poses.push_back(last);
+    last_t.push_back(ef.t_last);
+  }
+  res_.events_tracked += poses.size();
+  for (std::size_t k = poses.size(); k-- > 0;) {
+    res_.events.push_back(poses[k]);
+    res_.event_last_t.push_back(last_t[k]);
+    res_.event_anchors.push_back({back.referenceId(), back.T_w_kf().inverse() * poses[k].T_w_c});
   }
 }
 
@@ -395,9 +445,12 @@ void OdometryCore::thinBuffered() {
   ++res_.buffered_thinned;
 }
 
-void OdometryCore::pruneBuffered() {
+void OdometryCore::pruneBuffered(TimeNs now) {
+  // From the bootstrap's reference on, and up to buffered_before_reference_s before it (before there is
+  // one: before the newest event frame).
   const std::vector<BootstrapFrame>& bf = boot_->frames();
-  const TimeNs t0 = boot_->hasReference() && !bf.empty() ? bf.front().t : std::numeric_limits<TimeNs>::max();
+  const TimeNs t_ref = boot_->hasReference() && !bf.empty() ? bf.front().t : now;
+  const TimeNs t0 = t_ref - fromSeconds(cfg_.buffered_before_reference_s);
   std::erase_if(buffered_, [t0](const EventFrame& b) { return b.t < t0; });
 }
 

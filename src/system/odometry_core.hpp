@@ -51,11 +51,12 @@ class OdometryCore {
   bool trackRefused(TimeNs t, const cv::Mat& raw);  // true: the refused frame gave a pose
   void initialize(TimeNs t, const cv::Mat& img);
   void trackBufferedEvents(const Trajectory& boot_traj);
+  void trackEventsBeforeReference(const Keyframe& ref, const Trajectory& boot_traj);
   bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found);
   void loseTrack(TimeNs t_last_pose, const std::string& cause);
   void startSegment(TimeNs t);
   void retireSegment();
-  void pruneBuffered();
+  void pruneBuffered(TimeNs now);
   void thinBuffered();  // the buffered event frames thinned when they exceed buffered_max_mb
   void syncBootstrapEvents(TimeNs t);
   void syncReference();

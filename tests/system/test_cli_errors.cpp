@@ -84,6 +84,8 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
   expectError("run " + esim() + runOut() + " --set frame_cv_min_distance=-0.01",
               "frame_cv_min_distance and the frame trackers' min_step must not be negative");
   expectError("run " + esim() + runOut() + " --set buffered_max_mb=0", "buffered_max_mb must be > 0");
+  expectError("run " + esim() + runOut() + " --set buffered_before_reference_s=-1",
+              "buffered_before_reference_s must not be negative");
   expectError("run " + esim() + runOut() + " --start 100", "no frame in the requested time range");
 }
 

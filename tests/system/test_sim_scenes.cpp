@@ -169,5 +169,40 @@ TEST(SimScenes, TurningRoomAtOneFramePerSecondThreadedStartsTheLiveEventsInTheMo
   EXPECT_GE(a.coverage, 0.8);
 }
 
+// A camera that starts covered: the room's frames of the first 0.6 s are dark (refused), and the
+// bootstrap restarts (its first reference diverges after frames of almost no parallax) until its
+// reference is the frame at 2.6 s. The event frames of the second before that reference are tracked
+// backwards from it once the map exists (dropped, as they were, that second had no pose: the camera
+// moves 15 cm in it; measured ATE 0.364 cm, coverage 99 %).
+TEST(SimScenes, EventsBeforeTheBootstrapsReferenceAreTrackedBackwards) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const auto dir = test::tempDir("scene_room_covered_start");
+  const sim::Motion motion{
+      sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.05), 0.0, 4.0, traj_file.string())};
+  sim::Scene scene = sim::makePreset("room", motion, 1);
+  scene.loadTextures();
+  test::writeSimSequence(dir, scene, motion, test::noisySimConfig(1),
+                         {{motion.start(), motion.start() + fromSeconds(0.6), 0.05}});
+  const Sequence seq(dir);
+  OdometryConfig cfg;
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  ASSERT_FALSE(r.frames.empty());
+  const TimeNs t_ref = r.frames.front().t;  // the bootstrap's reference frame
+  ASSERT_GE(t_ref - r.first_t, fromSeconds(cfg.buffered_before_reference_s));
+  Trajectory gt = seq.groundTruth();
+  std::erase_if(gt, [&](const StampedPose& p) {
+    return p.t < t_ref - fromSeconds(cfg.buffered_before_reference_s) || p.t >= t_ref;
+  });
+  const eval::AteResult a = eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{});
+  std::printf(
+      "[ room, covered for 0.6 s ] reference at %.2f s; the second before it: ATE %.3f cm, "
+      "coverage %.1f %%\n",
+      toSeconds(t_ref - r.first_t), a.trans.rmse * 100, a.coverage * 100);
+  EXPECT_GE(a.coverage, 0.9);
+  EXPECT_LE(a.trans.rmse * 100, 0.5);
+}
+
 }  // namespace
 }  // namespace eds
