@@ -207,6 +207,10 @@ struct CostSums {
     return t;
   }
   double rmse() const { return n ? std::sqrt(ss / n) : 0.0; }
+  // The whole energy: these terms and the prior's (if any) at `frames`.
+  double energy(const BaPrior* prior, const std::vector<BaFrame>& frames) const {
+    return c + (prior ? prior->energy(frames) : 0.0);
+  }
 };
 
 namespace {
@@ -328,7 +332,7 @@ double PhotometricBA::cost(const std::vector<BaFrame>& frames, const std::vector
   const CostSums sum = CostSums::total(part);
   if (rmse) *rmse = sum.rmse();
   if (count) *count = sum.n;
-  return sum.c + (prior ? prior->energy(frames) : 0.0);
+  return sum.energy(prior, frames);
 }
 
 // Adds the prior's gradient b + Hx at the current state and its Hessian blocks between free frames.
@@ -437,7 +441,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
   NormalEquations ne, ne_try;
   CostSums sums;
   accumulate(frames, points, rho, gw, slot, dim, ne, prior, -1, &sums);
-  double c = sums.c + (prior ? prior->energy(frames) : 0.0);
+  double c = sums.energy(prior, frames);
   stats.initial_cost = c;
   stats.initial_rmse = sums.rmse();
   stats.residuals = sums.n;
@@ -466,7 +470,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
         c_new = cost(f_new, points, rho_new, gw, prior, nullptr, nullptr);
       } else {
         accumulate(f_new, points, rho_new, gw, slot, dim, ne_try, prior, -1, &sums);
-        c_new = sums.c + (prior ? prior->energy(f_new) : 0.0);
+        c_new = sums.energy(prior, f_new);
       }
       if (c_new < c) {
         frames.swap(f_new);
