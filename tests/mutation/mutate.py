@@ -118,6 +118,9 @@ def main():
         if unknown:
             sys.exit(f"unknown mutation ids: {sorted(unknown)}")
         muts = [m for m in muts if m["id"] in a.ids]
+    # Each mutation rebuilds only the test programs, so the programs the tests run (eds itself) must
+    # first match the unmutated sources: a stale one fails the command-line tests whatever the mutation.
+    subprocess.run(["cmake", "--build", a.build], capture_output=True)
     rows = []
     print("| mutation | file | what | result | killed by | s |\n|---|---|---|---|---|---|", flush=True)
     try:
