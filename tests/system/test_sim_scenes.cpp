@@ -93,9 +93,10 @@ TEST(SimScenes, RoomAtOneFramePerSecond) {
   std::printf(
       "[ room, 4 s, 1 frame/s ] initialized after %.2f s; ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
       toSeconds(r.init_t - r.first_t), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
-  // 1.2x rather than the usual 1.5x (the run is deterministic): without the bound on how fast buffered
-  // event poses may move between the two frames it is 0.459 cm.
-  EXPECT_LE(a.trans.rmse * 100, 1.2 * 0.358);
+  // 1.2x rather than the usual 1.5x (the run is deterministic). Measured 0.320 cm; without the bound
+  // on how fast buffered event poses may move it is 0.314 cm here (the bound matters on the turning
+  // desk at 1 FPS instead).
+  EXPECT_LE(a.trans.rmse * 100, 1.2 * 0.320);
   EXPECT_LE(a.trans.rmse * 100, 2.0);
   EXPECT_GE(a.coverage, 0.9);
 }
