@@ -20,6 +20,7 @@
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/realtime_run.hpp"
+#include "system/reference_run.hpp"
 #include "system/run_stats.hpp"
 
 namespace eds::app {
@@ -74,9 +75,11 @@ void runRun(RunArgs& a) {
   }
   logf(LogLevel::kInfo, "running on %s (Ctrl-C finishes early and keeps the outputs so far)",
        a.sequence.c_str());
-  const OdometryResult r = a.realtime
-                               ? runOdometryRealtime(seq, cfg, a.realtime_options, &listenForInterrupt())
-                               : runOdometry(seq, cfg, bar, &listenForInterrupt());
+  // The keyframes go to the output folder as they retire, not into memory until the end.
+  ReferenceKeyframeWriter keyframes(a.out);
+  const OdometryResult r =
+      a.realtime ? runOdometryRealtime(seq, cfg, a.realtime_options, &listenForInterrupt(), &keyframes)
+                 : runOdometry(seq, cfg, bar, &listenForInterrupt(), &keyframes);
   if (r.interrupted && bar) std::fprintf(stderr, "\n");
   RunInputs inputs{a.sequence, seq.format(), {}};
   if (seq.hasGroundTruth()) inputs.groundtruth = seq.groundTruth();

@@ -5,6 +5,7 @@
 // With `marginalize`, its points' residuals and the old prior become a Gaussian prior on the keyframes
 // that stay (Schur complement); without, its information is dropped, as the authors' code does. The
 // oldest keyframe in the window is held fixed (gauge).
+#include <utility>
 #include <vector>
 
 #include "backend/photometric_ba.hpp"
@@ -91,9 +92,10 @@ class SlidingWindow {
   int numPoints() const;
   int numPriorFrames() const { return static_cast<int>(prior_.frames.size()); }
 
-  // Everything that left the window (marginalized), and, with flush(), what is in it now.
-  const std::vector<RetiredKeyframe>& retiredKeyframes() const { return retired_kf_; }
-  const std::vector<MapPoint>& retiredPoints() const { return retired_pts_; }
+  // Everything that left the window (marginalized), and, with flush(), what is in it now; moved out
+  // (a long run's keyframe images and points are its largest share of memory: no second copy).
+  std::vector<RetiredKeyframe> takeRetiredKeyframes() { return std::exchange(retired_kf_, {}); }
+  std::vector<MapPoint> takeRetiredPoints() { return std::exchange(retired_pts_, {}); }
   void flush();
 
  private:

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
+#include <utility>
 
 #include "core/log.hpp"
 #include "system/run_stats.hpp"
@@ -80,6 +82,18 @@ void BackendWorker::finalSolve() {
   const ScopedStage ba(threaded_ ? &thread_clock_ : caller_clock_, Stage::kBundleAdjustment);
   window_.optimize();
   window_.flush();
+  std::lock_guard<std::mutex> lock(mutex_);
+  publishRetired();
+}
+
+void BackendWorker::publishRetired() {
+  std::vector<RetiredKeyframe> k = window_.takeRetiredKeyframes();
+  retired_.insert(retired_.end(), std::make_move_iterator(k.begin()), std::make_move_iterator(k.end()));
+}
+
+std::vector<RetiredKeyframe> BackendWorker::takeRetired() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return std::exchange(retired_, {});
 }
 
 std::optional<TrackingReference> BackendWorker::takeReference() {
@@ -164,6 +178,7 @@ void BackendWorker::process(KeyframeJob& job) {
   timings_.ba_ms.push_back(ba_ms);
   timings_.window_points.push_back(window_.numPoints());
   published_ = std::move(ref);
+  publishRetired();
 }
 
 // Inverse depths of a new keyframe's pixels by epipolar search in the newest and the oldest keyframe of

@@ -77,6 +77,8 @@ class BackendWorker {
   void finish();
   // The newest reference published since the last call, if any.
   std::optional<TrackingReference> takeReference();
+  // The keyframes the window retired (at their final poses) since the last call; from any thread.
+  std::vector<RetiredKeyframe> takeRetired();
   // After waitIdle(): the window (for outputs) and the timings.
   SlidingWindow& window() { return window_; }
   const BackendTimings& timings() const { return timings_; }
@@ -86,6 +88,7 @@ class BackendWorker {
  private:
   void run();
   void finalSolve();
+  void publishRetired();  // with mutex_ held
   void process(KeyframeJob& job);
   void searchDepths(const cv::Mat& img, const SE3& T_w_new, double a, double b,
                     const std::vector<cv::Point>& px, const std::vector<ProjectedPoint>& proj,
@@ -106,6 +109,7 @@ class BackendWorker {
   std::deque<KeyframeJob> queue_;
   bool working_ = false, stop_ = false, finish_ = false, finished_ = false;
   std::optional<TrackingReference> published_;
+  std::vector<RetiredKeyframe> retired_;  // moved out of the window after each keyframe
   std::thread thread_;
 };
 

@@ -10,7 +10,9 @@
 #include <functional>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -44,6 +46,8 @@ class Odometry::Impl {
         core_(camera, cfg_, res_, clock_),
         producer_(core_.undistorter(), cfg_.event_frame, cfg_.flicker_filter,
                   cfg_.use_events && cfg_.stream.event_thread, &clock_) {
+    if (listener_)
+      core_.setRetiredSink([this](const RetiredKeyframe& k) { return listener_->onKeyframeRetired(k); });
     if (cfg_.use_events && cfg_.deblur.exposure_s > 0) {
       exposures_.emplace(fromSeconds(cfg_.deblur.exposure_s));
       res_.exposure_s = cfg_.deblur.exposure_s;
@@ -137,6 +141,10 @@ class Odometry::Impl {
   }
 
   const OdometryResult& result() const { return res_; }
+  OdometryResult takeResult() {
+    if (!finished_) throw std::logic_error("Odometry: takeResult() before finish()");
+    return std::exchange(res_, {});
+  }
 
  private:
   struct PendingFrame {
@@ -333,5 +341,6 @@ void Odometry::addFrame(TimeNs t, const cv::Mat& gray8, TimeNs exposure) {
 }
 const OdometryResult& Odometry::finish() { return impl_->finish(); }
 const OdometryResult& Odometry::result() const { return impl_->result(); }
+OdometryResult Odometry::takeResult() { return impl_->takeResult(); }
 
 }  // namespace eds

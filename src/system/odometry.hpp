@@ -276,6 +276,10 @@ class OdometryListener {
   // The track was lost for good and a new map starts (its bootstrap from the segment's t_start on):
   // poses from here on are in the new segment's world frame and scale.
   virtual void onNewMapSegment(const MapSegment& /*segment*/) {}
+  // A keyframe left the back-end's window for good: its final pose, image and points. Returning true
+  // says the listener kept what it needs, and the result's keyframe_maps then hold only its time and
+  // pose (no image, no points), so that a long run's memory does not grow with them.
+  virtual bool onKeyframeRetired(const RetiredKeyframe& /*kf*/) { return false; }
 };
 
 // The odometry as a push API: events and frames go in as they arrive, poses come out as they are
@@ -291,8 +295,8 @@ class OdometryListener {
 // Buffering: see StreamConfig. Memory is bounded by the waits (frames waiting for events, event frames
 // waiting for frames), by the events of one packet and its lookahead, the producer's queue (about 1 M
 // events), and the event frames kept during the bootstrap (buffered_max_mb); the only thing that grows
-// with the run's length is the result itself (the poses, and the keyframes and points the window
-// retires).
+// with the run's length is the result itself (the poses, the points the window retires, and the
+// retired keyframes' images and points unless the listener takes them).
 class Odometry {
  public:
   // `camera`: the raw sensor's calibration (events and frames are in raw, distorted pixels).
@@ -315,6 +319,8 @@ class Odometry {
   const OdometryResult& finish();
   // The result so far (poses as tracked, counts, failures); complete after finish().
   const OdometryResult& result() const;
+  // After finish(): moves the result out (no copy of the keyframes and map); result() is then empty.
+  OdometryResult takeResult();
 
  private:
   class Impl;
@@ -327,7 +333,7 @@ class Odometry {
 // fed, the odometry finishes with what it has, and the result says `interrupted`.
 using ProgressFn = std::function<void(double done_s, double total_s)>;
 OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress = {},
-                           const std::atomic<bool>* stop = nullptr);
+                           const std::atomic<bool>* stop = nullptr, OdometryListener* listener = nullptr);
 
 // What a run over a recorded sequence processes: the selected frames (indices into seq.frames()) and
 // the time range; checks that the sequence holds what the configuration needs.

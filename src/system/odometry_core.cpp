@@ -53,6 +53,7 @@ OdometryCore::OdometryCore(const CameraModel& camera, const OdometryConfig& cfg,
 
 void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
   ++res_.frames_in;
+  collectRetired();
   const ScopedStage stage(&clock_, Stage::kFramePreparation);
   if (std::string why = quality_.check(t, raw); !why.empty()) {
     ++res_.frames_rejected;
@@ -384,10 +385,9 @@ void OdometryCore::startSegment(TimeNs t) {
 void OdometryCore::retireSegment() {
   BackendWorker& worker = odo_->worker();
   worker.finish();
-  const SlidingWindow& window = worker.window();
-  retired_keyframes_.insert(retired_keyframes_.end(), window.retiredKeyframes().begin(),
-                            window.retiredKeyframes().end());
-  retired_points_.insert(retired_points_.end(), window.retiredPoints().begin(), window.retiredPoints().end());
+  collectRetired();
+  std::vector<MapPoint> points = worker.window().takeRetiredPoints();
+  retired_points_.insert(retired_points_.end(), points.begin(), points.end());
   const BackendTimings& bt = worker.timings();
   auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
   append(retired_timings_.mapping_ms, bt.mapping_ms);
@@ -399,6 +399,18 @@ void OdometryCore::retireSegment() {
   }
 }
 
+// A long run's keyframe images and points are most of its memory: a sink that stores them elsewhere
+// keeps the result from growing with them.
+void OdometryCore::collectRetired() {
+  for (RetiredKeyframe& k : odo_->worker().takeRetired()) {
+    if (retired_sink_ && retired_sink_(k)) {
+      k.image.release();
+      std::vector<KeyframePoint>().swap(k.points);
+    }
+    retired_keyframes_.push_back(std::move(k));
+  }
+}
+
 void OdometryCore::finish() {
   retireSegment();
   const ScopedStage stage(&clock_, Stage::kResults);
@@ -406,17 +418,17 @@ void OdometryCore::finish() {
   res_.ba_ms = retired_timings_.ba_ms;
   res_.window_points = retired_timings_.window_points;
   res_.backend_stages_s = retired_backend_stages_;
-  res_.keyframe_maps = retired_keyframes_;
+  res_.keyframe_maps = std::move(retired_keyframes_);
   std::sort(res_.keyframe_maps.begin(), res_.keyframe_maps.end(),
             [](const auto& a, const auto& b) { return a.t < b.t; });
   for (const RetiredKeyframe& k : res_.keyframe_maps) res_.keyframes.push_back({k.t, k.T_w_kf});
   res_.pinhole = und_.pinhole();
-  res_.map = retired_points_;
-  res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, retired_keyframes_);
+  res_.map = std::move(retired_points_);
+  res_.frames_refined = refinedTrajectory(res_.frames, res_.frame_anchors, res_.keyframe_maps);
   Trajectory aligned_frames;
   for (std::size_t i = 0; i < res_.frames_refined.size() && i < frame_ok_.size(); ++i)
     if (frame_ok_[i]) aligned_frames.push_back(res_.frames_refined[i]);
-  res_.events_refined = smoothPoses(refinedTrajectory(res_.events, res_.event_anchors, retired_keyframes_),
+  res_.events_refined = smoothPoses(refinedTrajectory(res_.events, res_.event_anchors, res_.keyframe_maps),
                                     cfg_.event_smoothing_s);
   std::vector<TimeNs> intervals;
   for (std::size_t i = 1; i < aligned_frames.size(); ++i)

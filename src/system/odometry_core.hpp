@@ -40,6 +40,10 @@ class OdometryCore {
   // map, refined trajectories and back-end figures from every segment.
   void finish();
 
+  // Called (on the caller's thread) with each keyframe the back-end retires; when it returns true,
+  // the result keeps only the keyframe's time and pose, not its image and points.
+  void setRetiredSink(std::function<bool(const RetiredKeyframe&)> sink) { retired_sink_ = std::move(sink); }
+
   TimeNs lastTime() const { return last_t_; }
   // The current segment's frame front-end.
   FrameFrontend& frontend() { return *odo_; }
@@ -56,6 +60,7 @@ class OdometryCore {
   void loseTrack(TimeNs t_last_pose, const std::string& cause);
   void startSegment(TimeNs t);
   void retireSegment();
+  void collectRetired();
   void pruneBuffered(TimeNs now);
   void thinBuffered();  // the buffered event frames thinned when they exceed buffered_max_mb
   void syncBootstrapEvents(TimeNs t);
@@ -96,6 +101,7 @@ class OdometryCore {
   std::vector<char> frame_ok_;  // parallel to the result's frames: the alignment succeeded
   // What the back-ends of the segments before the current one left.
   std::vector<RetiredKeyframe> retired_keyframes_;
+  std::function<bool(const RetiredKeyframe&)> retired_sink_;
   std::vector<MapPoint> retired_points_;
   BackendTimings retired_timings_;
   StageSeconds retired_backend_stages_{};

@@ -172,11 +172,12 @@ void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseF
 }  // namespace
 
 OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
-                                   const RealtimeOptions& options, const std::atomic<bool>* stop) {
+                                   const RealtimeOptions& options, const std::atomic<bool>* stop,
+                                   OdometryListener* listener) {
   if (!(options.speed > 0) || !(options.max_latency_s > 0))
     throw std::invalid_argument("realtime: speed and max_latency_s must be > 0");
   const RunPlan plan = planRun(seq, cfg);
-  Odometry odo(seq.camera(), cfg);
+  Odometry odo(seq.camera(), cfg, listener);
   const Clock::time_point wall0 = Clock::now();
   const ReleaseFn release = [&](TimeNs t) {
     return wall0 +
@@ -197,7 +198,8 @@ OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cf
   }
   camera.join();
   if (const std::exception_ptr error = queue.error()) std::rethrow_exception(error);
-  OdometryResult r = odo.finish();  // may track the last buffered event frames
+  odo.finish();  // may track the last buffered event frames
+  OdometryResult r = odo.takeResult();
   recordLatencies(r, release, rt.latency_ms);
   rt.on = true;
   rt.speed = options.speed;

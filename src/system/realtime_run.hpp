@@ -20,6 +20,7 @@ struct RealtimeOptions {
 };
 
 OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
-                                   const RealtimeOptions& options, const std::atomic<bool>* stop = nullptr);
+                                   const RealtimeOptions& options, const std::atomic<bool>* stop = nullptr,
+                                   OdometryListener* listener = nullptr);
 
 }  // namespace eds

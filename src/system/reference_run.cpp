@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
@@ -20,6 +21,31 @@ namespace {
 
 std::filesystem::path keyframeFile(const std::filesystem::path& dir, std::size_t i, const char* ext) {
   return numberedFile(dir, "kf_", i, 6, std::string(".") + ext);
+}
+
+std::filesystem::path retiredFile(const std::filesystem::path& kdir, TimeNs t, const char* ext) {
+  return kdir / ("retired_" + std::to_string(t) + "." + ext);
+}
+
+void writeKeyframeFiles(const std::filesystem::path& png, const std::filesystem::path& txt,
+                        const RetiredKeyframe& k) {
+  writeImageFile(png, k.image);
+  std::ostringstream pts;
+  pts << "# u v inv_depth (pixels of the undistorted image; inverse depth in map units)\n";
+  pts.precision(9);
+  for (const KeyframePoint& p : k.points) pts << p.u << " " << p.v << " " << p.inv_depth << "\n";
+  writeTextFile(txt, pts.str());
+}
+
+// A keyframe that ReferenceKeyframeWriter wrote as it retired: its files take the row's names.
+void renameRetired(const std::filesystem::path& kdir, const RetiredKeyframe& k, std::size_t row) {
+  for (const char* ext : {"png", "txt"}) {
+    const std::filesystem::path from = retiredFile(kdir, k.t, ext);
+    if (!std::filesystem::exists(from))
+      throw std::runtime_error("keyframe at t = " + std::to_string(k.t) +
+                               " ns has no image in the result and no " + from.string());
+    std::filesystem::rename(from, keyframeFile(kdir, row, ext));
+  }
 }
 
 std::vector<KeyframePoint> readPoints(const std::filesystem::path& file, int width, int height) {
@@ -64,14 +90,22 @@ void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel
   for (std::size_t i = 0; i < keyframes.size(); ++i) {
     const RetiredKeyframe& k = keyframes[i];
     index.push_back({k.t, k.T_w_kf});
-    writeImageFile(keyframeFile(kdir, i, "png"), k.image);
-    std::ostringstream pts;
-    pts << "# u v inv_depth (pixels of the undistorted image; inverse depth in map units)\n";
-    pts.precision(9);
-    for (const KeyframePoint& p : k.points) pts << p.u << " " << p.v << " " << p.inv_depth << "\n";
-    writeTextFile(keyframeFile(kdir, i, "txt"), pts.str());
+    if (k.image.empty())
+      renameRetired(kdir, k, i);
+    else
+      writeKeyframeFiles(keyframeFile(kdir, i, "png"), keyframeFile(kdir, i, "txt"), k);
   }
   writeTum(kdir / "index.txt", index);
+}
+
+ReferenceKeyframeWriter::ReferenceKeyframeWriter(const std::filesystem::path& dir)
+    : kdir_(dir / "keyframes") {
+  std::filesystem::create_directories(kdir_);
+}
+
+bool ReferenceKeyframeWriter::onKeyframeRetired(const RetiredKeyframe& kf) {
+  writeKeyframeFiles(retiredFile(kdir_, kf.t, "png"), retiredFile(kdir_, kf.t, "txt"), kf);
+  return true;
 }
 
 Trajectory readReferenceIndex(const std::filesystem::path& dir) {

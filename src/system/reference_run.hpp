@@ -13,6 +13,7 @@
 #include "core/camera.hpp"
 #include "io/trajectory_io.hpp"
 #include "map/keyframe.hpp"
+#include "system/odometry.hpp"
 
 namespace eds {
 
@@ -21,9 +22,21 @@ struct ReferenceRun {
   std::vector<Keyframe> keyframes;  // image (CV_32F in [0, 1]), points (u, v, inv_depth), t, T_w_kf
 };
 
-// Writes the keyframes (sorted by time) under dir/keyframes/.
+// Writes the keyframes (sorted by time) under dir/keyframes/. Those without an image were written
+// there by a ReferenceKeyframeWriter as they retired; their files are renamed to their rows.
 void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel& pinhole,
                              const std::vector<RetiredKeyframe>& keyframes);
+
+// Writes each keyframe's image and points under dir/keyframes/ as the run retires it (named by its
+// time until writeReferenceKeyframes gives them their rows), so that a long run does not hold them.
+class ReferenceKeyframeWriter : public OdometryListener {
+ public:
+  explicit ReferenceKeyframeWriter(const std::filesystem::path& dir);
+  bool onKeyframeRetired(const RetiredKeyframe& kf) override;
+
+ private:
+  std::filesystem::path kdir_;
+};
 // Reads dir/keyframes/; InputError naming the file (and line) for anything missing or malformed.
 ReferenceRun readReferenceRun(const std::filesystem::path& dir);
 // The parts, for readers that need only a few keyframes: the pinhole camera (size from the first

@@ -148,12 +148,12 @@ RunPlan planRun(const Sequence& seq, const OdometryConfig& cfg) {
 }
 
 OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const ProgressFn& progress,
-                           const std::atomic<bool>* stop) {
+                           const std::atomic<bool>* stop, OdometryListener* listener) {
   const RunPlan plan = planRun(seq, cfg);
   const std::vector<std::size_t>& idx = plan.frames;
   const TimeNs first_t = plan.first_t, t_end = plan.t_end;
   const double total_s = plan.total_s;
-  Odometry odo(seq.camera(), cfg);
+  Odometry odo(seq.camera(), cfg, listener);
   TimeNs t_reported = first_t;
   auto report = [&](TimeNs t) {
     if (!progress || t - t_reported < fromSeconds(0.1)) return;
@@ -162,7 +162,8 @@ OdometryResult runOdometry(const Sequence& seq, const OdometryConfig& cfg, const
   };
   const std::optional<TimeNs> stopped_at = feedSequence(seq, idx, t_end, cfg.use_events, odo, report, stop);
   if (progress && !stopped_at) progress(total_s, total_s);
-  OdometryResult r = odo.finish();
+  odo.finish();
+  OdometryResult r = odo.takeResult();
   if (stopped_at) {
     r.interrupted = true;
     r.interrupted_t = *stopped_at;

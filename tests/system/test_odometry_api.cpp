@@ -17,6 +17,7 @@
 #include "eval/ate.hpp"
 #include "io/convert.hpp"
 #include "system/odometry.hpp"
+#include "system/reference_run.hpp"
 #include "test_data.hpp"
 
 namespace eds {
@@ -231,11 +232,26 @@ TEST(OdometryApi, ThreadedBackendFromAProducerThreadIsAccurate) {
   OdometryConfig cfg;
   cfg.threaded_backend = true;
   const EventArray ev = allEvents(seq);
-  Odometry odo(seq.camera(), cfg);
+  // The retired keyframes are handed to the listener on the feeding thread, not the back-end's.
+  struct RetiredOnThread : OdometryListener {
+    std::thread::id thread;
+    std::size_t calls = 0, elsewhere = 0;
+    bool onKeyframeRetired(const RetiredKeyframe&) override {
+      ++calls, elsewhere += std::this_thread::get_id() != thread;
+      return false;
+    }
+  } retired;
+  Odometry odo(seq.camera(), cfg, &retired);
   OdometryResult r;
-  std::thread producer([&] { r = feed(odo, seq, ev, 50000); });
+  std::thread producer([&] {
+    retired.thread = std::this_thread::get_id();
+    r = feed(odo, seq, ev, 50000);
+  });
   producer.join();
   ASSERT_TRUE(r.initialized);
+  EXPECT_EQ(retired.calls, r.keyframe_maps.size());
+  EXPECT_EQ(retired.elsewhere, 0u);
+  for (const RetiredKeyframe& k : r.keyframe_maps) EXPECT_FALSE(k.image.empty());
   const eval::AteResult a = eval::evaluateAte(r.events_refined, seq.groundTruth(), eval::EvalConfig{});
   std::printf("[ api, threaded back-end ] events refined ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
               a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
@@ -244,6 +260,44 @@ TEST(OdometryApi, ThreadedBackendFromAProducerThreadIsAccurate) {
   EXPECT_LT(a.rot.rmse, 0.25);
   EXPECT_GE(a.coverage, 0.9);
   expectStagesAccountForTheWallTime(r, true);
+}
+
+// A listener that takes the retired keyframes (as `eds run` writes them to its output folder while it
+// runs) leaves the result only their times and poses, and the keyframes/ folder is the same as from
+// the keyframes held in memory to the end.
+TEST(OdometryApi, KeyframesWrittenAsTheyRetireGiveTheKeyframesFolderOfTheResult) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  const OdometryConfig cfg = syncConfig();
+  const auto out = test::tempDir("api_retired");
+  const OdometryResult held = runOdometry(seq, cfg);
+  writeOdometryOutputs(out / "held", held, cfg);
+  struct Writer : ReferenceKeyframeWriter {
+    using ReferenceKeyframeWriter::ReferenceKeyframeWriter;
+    std::size_t during_run = 0;
+    bool onKeyframeRetired(const RetiredKeyframe& kf) override {
+      ++during_run;
+      return ReferenceKeyframeWriter::onKeyframeRetired(kf);
+    }
+  } writer(out / "written");
+  const OdometryResult taken = runOdometry(seq, cfg, {}, nullptr, &writer);
+  ASSERT_GE(held.keyframe_maps.size(), 5u);
+  ASSERT_EQ(taken.keyframe_maps.size(), held.keyframe_maps.size());
+  EXPECT_EQ(writer.during_run, held.keyframe_maps.size());
+  for (std::size_t i = 0; i < held.keyframe_maps.size(); ++i) {
+    EXPECT_FALSE(held.keyframe_maps[i].image.empty());
+    EXPECT_TRUE(taken.keyframe_maps[i].image.empty() && taken.keyframe_maps[i].points.empty()) << i;
+    EXPECT_EQ(taken.keyframe_maps[i].t, held.keyframe_maps[i].t);
+  }
+  writeOdometryOutputs(out / "written", taken, cfg);
+  std::size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(out / "written" / "keyframes")) {
+    ++files;
+    const std::string name = e.path().filename().string();
+    EXPECT_TRUE(test::fileText(e.path()) == test::fileText(out / "held" / "keyframes" / name)) << name;
+  }
+  EXPECT_EQ(files, 2 * held.keyframe_maps.size() + 2);  // kf_N.png and .txt, camera.txt, index.txt
+  expectSameOutputs(out / "held", out / "written");
 }
 
 // Frames that find no events go ahead after stream.max_pending_frames; the events that come later
