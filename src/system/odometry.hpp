@@ -199,7 +199,7 @@ struct OdometryResult {
   // writes its frames' poses: through their tracking reference's final pose).
   std::vector<PoseAnchor> frame_anchors, event_anchors;
   Trajectory frames_refined, events_refined;
-  std::size_t event_frames = 0, events_tracked = 0;
+  std::size_t event_frames = 0, events_tracked = 0;  // event frames handed to the tracker, tracked
   std::vector<double> event_track_ms;
   std::vector<EventFrameSnapshot> event_snapshots;  // in time order
   Trajectory keyframes;                             // final (optimized) keyframe poses
@@ -245,7 +245,9 @@ struct OdometryResult {
     double speed = 0;
     std::vector<double> latency_ms;  // per event pose: from its frame's last event to the pose
     std::size_t events_skipped = 0, frames_skipped = 0;
+    int max_event_frame_stride = 1;  // the most event frames shed: all but every k-th (see below)
   } realtime;
+  std::size_t event_frames_shed = 0;  // built but not tracked (Odometry::setEventFrameStride)
 };
 
 // The start times of map segments 1, 2, ... (segment 0 holds everything before the first).
@@ -319,6 +321,10 @@ class Odometry {
   const OdometryResult& finish();
   // The result so far (poses as tracked, counts, failures); complete after finish().
   const OdometryResult& result() const;
+  // Load shedding for a live caller that falls behind: from now on only every k-th event frame is
+  // tracked (k = 1, the default: all); the others are counted in event_frames_shed. The event
+  // tracker's steps grow by k, which it follows at hand-held speeds; frames and keyframes are kept.
+  void setEventFrameStride(int k);
   // After finish(): moves the result out (no copy of the keyframes and map); result() is then empty.
   OdometryResult takeResult();
 

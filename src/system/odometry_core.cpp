@@ -53,7 +53,10 @@ OdometryCore::OdometryCore(const CameraModel& camera, const OdometryConfig& cfg,
 
 void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
   ++res_.frames_in;
-  collectRetired();
+  {
+    const ScopedStage results(&clock_, Stage::kResults);  // the listener may write them out
+    collectRetired();
+  }
   const ScopedStage stage(&clock_, Stage::kFramePreparation);
   if (std::string why = quality_.check(t, raw); !why.empty()) {
     ++res_.frames_rejected;

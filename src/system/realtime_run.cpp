@@ -149,13 +149,44 @@ void recordLatencies(const OdometryResult& now, const ReleaseFn& release, std::v
         std::chrono::duration<double, std::milli>(Clock::now() - release(now.event_last_t[k])).count());
 }
 
+// Behind, the processing sheds event frames before it drops whole chunks of events: the stride of
+// the event frames it tracks doubles (up to kMaxStride) while items wait over a quarter of the latency
+// bound, and halves once they wait under a twentieth; at most one change per 50 ms, so that a change
+// shows in the waits before the next.
+class StrideControl {
+ public:
+  static constexpr int kMaxStride = 8;
+  explicit StrideControl(double max_latency_s) : max_latency_s_(max_latency_s) {}
+
+  void update(double waited_s, Odometry& odo, OdometryResult::Realtime& rt) {
+    const Clock::time_point now = Clock::now();
+    if (now - changed_ < std::chrono::milliseconds(50)) return;
+    int next = stride_;
+    if (waited_s > 0.25 * max_latency_s_)
+      next = std::min(2 * stride_, kMaxStride);
+    else if (waited_s < 0.05 * max_latency_s_)
+      next = std::max(stride_ / 2, 1);
+    if (next == stride_) return;
+    stride_ = next, changed_ = now;
+    odo.setEventFrameStride(stride_);
+    rt.max_event_frame_stride = std::max(rt.max_event_frame_stride, stride_);
+  }
+
+ private:
+  double max_latency_s_;
+  int stride_ = 1;
+  Clock::time_point changed_{};
+};
+
 // The processing: what was released, unless it waited too long (chunks) or is stale (frames).
 void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseFn& release,
              ReleaseQueue& queue, Odometry& odo, OdometryResult::Realtime& rt) {
   Item item;
   bool newer_frame = false;
   const auto max_wait = std::chrono::duration<double>(options.max_latency_s);
+  StrideControl stride(options.max_latency_s);
   while (queue.pop(item, newer_frame)) {
+    stride.update(std::chrono::duration<double>(Clock::now() - item.released).count(), odo, rt);
     if (item.frame && newer_frame) {
       ++rt.frames_skipped;
     } else if (!item.frame && Clock::now() - item.released > max_wait) {

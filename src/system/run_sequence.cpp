@@ -244,6 +244,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"tracked", r.tracked},
                  {"failures", r.failures.size()},
                  {"event_frames", r.event_frames},
+                 {"event_frames_shed", r.event_frames_shed},
                  {"events_flicker_dropped", r.events_flicker_dropped},
                  {"event_frames_tracked", r.events_tracked},
                  {"event_poses", r.events.size()},
@@ -282,7 +283,8 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
     j["realtime"] = {{"speed", r.realtime.speed},
                      {"latency_ms", timingStats(r.realtime.latency_ms)},
                      {"events_skipped", r.realtime.events_skipped},
-                     {"frames_skipped", r.realtime.frames_skipped}};
+                     {"frames_skipped", r.realtime.frames_skipped},
+                     {"max_event_frame_stride", r.realtime.max_event_frame_stride}};
   nlohmann::json fails = nlohmann::json::array();
   for (const auto& f : r.failures) fails.push_back({{"t", toSeconds(f.t)}, {"reason", f.reason}});
   j["failures"] = fails;

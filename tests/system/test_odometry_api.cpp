@@ -262,6 +262,38 @@ TEST(OdometryApi, ThreadedBackendFromAProducerThreadIsAccurate) {
   expectStagesAccountForTheWallTime(r, true);
 }
 
+// Load shedding: with every third event frame tracked, two in three are counted as shed, the tracker
+// follows the larger steps, and the event-rate poses stay within 1.5 times the full run's error (ESIM:
+// 0.088 against 0.087 cm, rotation 0.087 against 0.111 degrees).
+TEST(OdometryApi, EveryThirdEventFrameTrackedUnderLoadShedding) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  const OdometryConfig cfg = syncConfig();
+  const OdometryResult full = runOdometry(seq, cfg);
+  Odometry odo(seq.camera(), cfg);
+  odo.setEventFrameStride(3);
+  const OdometryResult& r = feed(odo, seq, allEvents(seq), 100000);
+  ASSERT_TRUE(r.initialized);
+  EXPECT_EQ(full.event_frames_shed, 0u);
+  const std::size_t built = r.event_frames + r.event_frames_shed;  // event_frames: those handed on
+  EXPECT_EQ(built, full.event_frames);
+  const double shed = static_cast<double>(r.event_frames_shed) / static_cast<double>(built);
+  EXPECT_NEAR(shed, 2.0 / 3.0, 0.03);
+  EXPECT_NEAR(static_cast<double>(r.events_tracked), static_cast<double>(full.events_tracked) / 3.0,
+              0.05 * static_cast<double>(full.events_tracked));
+  const eval::EvalConfig ec;
+  const eval::AteResult a = eval::evaluateAte(r.events_refined, seq.groundTruth(), ec);
+  const eval::AteResult f = eval::evaluateAte(full.events_refined, seq.groundTruth(), ec);
+  std::printf(
+      "[ api, every 3rd event frame ] %zu of %zu shed; ATE %.3f cm (all tracked: %.3f), rot %.3f deg "
+      "(%.3f), coverage %.1f %%\n",
+      r.event_frames_shed, built, a.trans.rmse * 100, f.trans.rmse * 100, a.rot.rmse, f.rot.rmse,
+      a.coverage * 100);
+  EXPECT_LT(a.trans.rmse, 1.5 * f.trans.rmse);
+  EXPECT_LT(a.rot.rmse, 1.5 * f.rot.rmse);
+  EXPECT_GE(a.coverage, 0.9);
+}
+
 // A listener that takes the retired keyframes (as `eds run` writes them to its output folder while it
 // runs) leaves the result only their times and poses, and the keyframes/ folder is the same as from
 // the keyframes held in memory to the end.
@@ -370,6 +402,8 @@ TEST(OdometryApi, RefusesBadInputWithAReason) {
   EXPECT_THROW(odo.addFrame(0, cv::Mat(180, 240, CV_8UC3, cv::Scalar(0))), std::invalid_argument);
   odo.addFrame(1000, cv::Mat(180, 240, CV_8UC1, cv::Scalar(128)));
   EXPECT_THROW(odo.addFrame(1000, cv::Mat(180, 240, CV_8UC1, cv::Scalar(128))), std::invalid_argument);
+  EXPECT_THROW(odo.setEventFrameStride(0), std::invalid_argument);
+  EXPECT_THROW(odo.takeResult(), std::logic_error);  // before finish()
   odo.finish();
   EXPECT_THROW(odo.addFrame(2000, cv::Mat(180, 240, CV_8UC1, cv::Scalar(128))), std::logic_error);
   CameraModel no_size = cam;

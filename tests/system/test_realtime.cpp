@@ -58,6 +58,9 @@ TEST(Realtime, FarFasterThanTheProcessingShedsLoad) {
   EXPECT_GT(r.realtime.events_skipped, 1'000'000u);
   EXPECT_GT(r.realtime.frames_skipped, 50u);
   EXPECT_LT(r.frames_in, seq.frames().size());
+  // Behind from the start, it sheds event frames too, the stride doubling at most every 50 ms.
+  EXPECT_GE(r.realtime.max_event_frame_stride, 2);
+  EXPECT_GT(r.event_frames_shed, 0u);
 }
 
 TEST(Realtime, AStopRequestEndsTheRun) {
