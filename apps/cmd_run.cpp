@@ -39,13 +39,15 @@ struct RunArgs {
   bool report = false;
 };
 
-void printRealtime(const OdometryResult::Realtime& rt) {
+void printRealtime(const OdometryResult& r) {
+  const OdometryResult::Realtime& rt = r.realtime;
   const nlohmann::json s = timingStats(rt.latency_ms);  // as summary.json reports it
   const auto at = [&](const char* key) { return s.is_null() ? 0.0 : s[key].get<double>(); };
   std::printf(
       "real time at x%.2f: event pose latency %.1f ms median, %.1f ms p95, %.1f ms max; skipped %zu events, "
-      "%zu frames\n",
-      rt.speed, at("median"), at("p95"), at("max"), rt.events_skipped, rt.frames_skipped);
+      "%zu frames; %zu event frames shed (stride up to %d)\n",
+      rt.speed, at("median"), at("p95"), at("max"), rt.events_skipped, rt.frames_skipped, r.event_frames_shed,
+      rt.max_event_frame_stride);
 }
 
 void runRun(RunArgs& a) {
@@ -111,7 +113,7 @@ void runRun(RunArgs& a) {
               r.sequence_s > 0 ? r.wall_s / r.sequence_s : 0.0);
   if (cfg.use_events)
     std::printf("%zu of %zu event frames tracked (event-rate poses)\n", r.events_tracked, r.event_frames);
-  if (r.realtime.on) printRealtime(r.realtime);
+  if (r.realtime.on) printRealtime(r);
   std::printf(
       "wrote %s/{%strajectory_frames[_live].txt, keyframes.txt, map.ply, summary.json, config_used.yaml}\n",
       a.out.c_str(), cfg.use_events ? "trajectory_events[_live].txt, " : "");

@@ -149,25 +149,27 @@ void recordLatencies(const OdometryResult& now, const ReleaseFn& release, std::v
         std::chrono::duration<double, std::milli>(Clock::now() - release(now.event_last_t[k])).count());
 }
 
-// Behind, the processing sheds event frames before it drops whole chunks of events: the stride of
-// the event frames it tracks doubles (up to kMaxStride) while items wait over a quarter of the latency
-// bound, and halves once they wait under a twentieth; at most one change per 50 ms, so that a change
-// shows in the waits before the next.
+// Behind, the processing sheds event frames before it drops whole chunks of events: every 50 ms the
+// longest wait of the items taken meanwhile decides, the stride of the event frames it tracks doubling
+// (up to kMaxStride) above a quarter of the latency bound and halving under a twentieth. The window
+// lets a change show in the waits before the next, and one item behind a keyframe does not decide.
 class StrideControl {
  public:
   static constexpr int kMaxStride = 8;
   explicit StrideControl(double max_latency_s) : max_latency_s_(max_latency_s) {}
 
   void update(double waited_s, Odometry& odo, OdometryResult::Realtime& rt) {
+    longest_s_ = std::max(longest_s_, waited_s);
     const Clock::time_point now = Clock::now();
-    if (now - changed_ < std::chrono::milliseconds(50)) return;
+    if (now - decided_ < std::chrono::milliseconds(50)) return;
     int next = stride_;
-    if (waited_s > 0.25 * max_latency_s_)
+    if (longest_s_ > 0.25 * max_latency_s_)
       next = std::min(2 * stride_, kMaxStride);
-    else if (waited_s < 0.05 * max_latency_s_)
+    else if (longest_s_ < 0.05 * max_latency_s_)
       next = std::max(stride_ / 2, 1);
+    decided_ = now, longest_s_ = 0;
     if (next == stride_) return;
-    stride_ = next, changed_ = now;
+    stride_ = next;
     odo.setEventFrameStride(stride_);
     rt.max_event_frame_stride = std::max(rt.max_event_frame_stride, stride_);
   }
@@ -175,7 +177,8 @@ class StrideControl {
  private:
   double max_latency_s_;
   int stride_ = 1;
-  Clock::time_point changed_{};
+  double longest_s_ = 0;
+  Clock::time_point decided_{};
 };
 
 // The processing: what was released, unless it waited too long (chunks) or is stale (frames).
@@ -229,7 +232,8 @@ OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cf
   }
   camera.join();
   if (const std::exception_ptr error = queue.error()) std::rethrow_exception(error);
-  odo.finish();  // may track the last buffered event frames
+  odo.setEventFrameStride(1);  // no more input: nothing left to catch up with
+  odo.finish();                // may track the last buffered event frames
   OdometryResult r = odo.takeResult();
   recordLatencies(r, release, rt.latency_ms);
   rt.on = true;

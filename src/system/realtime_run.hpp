@@ -2,10 +2,11 @@
 // A recorded sequence fed to the odometry on the wall clock, as a camera driver would: a producer
 // thread releases each chunk of events and each frame when its time comes (at `speed` times real time),
 // and the calling thread processes what was released. When processing falls behind, it sheds load
-// rather than fall further behind: event chunks released more than `max_latency_s` ago are dropped
-// (the odometry sees a gap, as after a USB drop) and a frame is dropped when a newer one is already
-// waiting; the queue between the threads is bounded. The result's `realtime` part says what was
-// dropped and how late each event pose came.
+// rather than fall further behind: first it tracks only every 2nd, 4th or 8th event frame (the
+// stride rises while items wait and falls once they do not); then event chunks released more than
+// `max_latency_s` ago are dropped (the odometry sees a gap, as after a USB drop) and a frame is
+// dropped when a newer one is already waiting; the queue between the threads is bounded. The
+// result's `realtime` part says what was dropped and how late each event pose came.
 #include <atomic>
 #include <cstddef>
 

@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
-#include <stdexcept>
 #include <string>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "io/line_reader.hpp"
 #include "io/output_file.hpp"
 #include "io/sequence.hpp"
@@ -23,8 +23,8 @@ std::filesystem::path keyframeFile(const std::filesystem::path& dir, std::size_t
   return numberedFile(dir, "kf_", i, 6, std::string(".") + ext);
 }
 
-std::filesystem::path retiredFile(const std::filesystem::path& kdir, TimeNs t, const char* ext) {
-  return kdir / ("retired_" + std::to_string(t) + "." + ext);
+std::filesystem::path retiredFile(const std::filesystem::path& kdir, int id, const char* ext) {
+  return kdir / ("retired_" + std::to_string(id) + "." + ext);
 }
 
 void writeKeyframeFiles(const std::filesystem::path& png, const std::filesystem::path& txt,
@@ -39,13 +39,24 @@ void writeKeyframeFiles(const std::filesystem::path& png, const std::filesystem:
 
 // A keyframe that ReferenceKeyframeWriter wrote as it retired: its files take the row's names.
 void renameRetired(const std::filesystem::path& kdir, const RetiredKeyframe& k, std::size_t row) {
-  for (const char* ext : {"png", "txt"}) {
-    const std::filesystem::path from = retiredFile(kdir, k.t, ext);
-    if (!std::filesystem::exists(from))
-      throw std::runtime_error("keyframe at t = " + std::to_string(k.t) +
-                               " ns has no image in the result and no " + from.string());
-    std::filesystem::rename(from, keyframeFile(kdir, row, ext));
-  }
+  for (const char* ext : {"png", "txt"})
+    std::filesystem::rename(retiredFile(kdir, k.id, ext), keyframeFile(kdir, row, ext));
+}
+
+// Every keyframe either holds its image and points or was written by ReferenceKeyframeWriter; a
+// listener of its own may have taken them elsewhere.
+bool keyframesAvailable(const std::filesystem::path& kdir, const std::vector<RetiredKeyframe>& keyframes) {
+  const auto written = [&](int id) {
+    return std::filesystem::exists(retiredFile(kdir, id, "png")) &&
+           std::filesystem::exists(retiredFile(kdir, id, "txt"));
+  };
+  for (const RetiredKeyframe& k : keyframes)
+    if (k.image.empty() && !written(k.id)) {
+      logf(LogLevel::kWarn, "keyframes/ not written: keyframe %d's image and points are not in the result",
+           k.id);
+      return false;
+    }
+  return true;
 }
 
 std::vector<KeyframePoint> readPoints(const std::filesystem::path& file, int width, int height) {
@@ -81,6 +92,7 @@ std::vector<KeyframePoint> readPoints(const std::filesystem::path& file, int wid
 void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel& pinhole,
                              const std::vector<RetiredKeyframe>& keyframes) {
   const std::filesystem::path kdir = dir / "keyframes";
+  if (!keyframesAvailable(kdir, keyframes)) return;
   std::filesystem::create_directories(kdir);
   std::ostringstream cam;
   cam.precision(17);
@@ -104,7 +116,7 @@ ReferenceKeyframeWriter::ReferenceKeyframeWriter(const std::filesystem::path& di
 }
 
 bool ReferenceKeyframeWriter::onKeyframeRetired(const RetiredKeyframe& kf) {
-  writeKeyframeFiles(retiredFile(kdir_, kf.t, "png"), retiredFile(kdir_, kf.t, "txt"), kf);
+  writeKeyframeFiles(retiredFile(kdir_, kf.id, "png"), retiredFile(kdir_, kf.id, "txt"), kf);
   return true;
 }
 

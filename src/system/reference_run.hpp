@@ -23,12 +23,13 @@ struct ReferenceRun {
 };
 
 // Writes the keyframes (sorted by time) under dir/keyframes/. Those without an image were written
-// there by a ReferenceKeyframeWriter as they retired; their files are renamed to their rows.
+// there by a ReferenceKeyframeWriter as they retired; their files are renamed to their rows. When a
+// keyframe is in neither place (another listener took it), nothing is written and a warning says so.
 void writeReferenceKeyframes(const std::filesystem::path& dir, const CameraModel& pinhole,
                              const std::vector<RetiredKeyframe>& keyframes);
 
 // Writes each keyframe's image and points under dir/keyframes/ as the run retires it (named by its
-// time until writeReferenceKeyframes gives them their rows), so that a long run does not hold them.
+// id until writeReferenceKeyframes gives them their rows), so that a long run does not hold them.
 class ReferenceKeyframeWriter : public OdometryListener {
  public:
   explicit ReferenceKeyframeWriter(const std::filesystem::path& dir);

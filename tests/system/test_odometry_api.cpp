@@ -330,6 +330,10 @@ TEST(OdometryApi, KeyframesWrittenAsTheyRetireGiveTheKeyframesFolderOfTheResult)
   }
   EXPECT_EQ(files, 2 * held.keyframe_maps.size() + 2);  // kf_N.png and .txt, camera.txt, index.txt
   expectSameOutputs(out / "held", out / "written");
+  // Written elsewhere, the result has no keyframe images to give: the other outputs, no keyframes/.
+  writeOdometryOutputs(out / "elsewhere", taken, cfg);
+  EXPECT_FALSE(std::filesystem::exists(out / "elsewhere" / "keyframes"));
+  expectSameOutputs(out / "held", out / "elsewhere");
 }
 
 // Frames that find no events go ahead after stream.max_pending_frames; the events that come later
