@@ -43,6 +43,9 @@ int BackendWorker::submit(KeyframeJob job) {
     process(job);
     return id;
   }
+  // The worker gets pixels of its own: cv::Mat's reference count lives in OpenCV's uninstrumented
+  // library, so a buffer the caller keeps reading and the worker frees is a race to ThreadSanitizer.
+  job.image = job.image.clone();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     queue_.push_back(std::move(job));
