@@ -1,5 +1,6 @@
 #include "io/ros_recording.hpp"
 
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 namespace eds {
@@ -76,24 +77,30 @@ cv::Mat decodeRosImage(RosMessageReader& r) {
   if (!enc)
     throw r.error("image encoding '" + encoding +
                   "' is not read (mono8, mono16, rgb8, bgr8, rgba8, bgra8 are)");
+  constexpr std::uint32_t kMaxSide = 1 << 16;
+  if (width > kMaxSide || height > kMaxSide)
+    throw r.error("image of " + std::to_string(width) + "x" + std::to_string(height) +
+                  " pixels: no camera has that many");
   const std::size_t row = static_cast<std::size_t>(width) * CV_ELEM_SIZE(enc->type);
   if (width == 0 || height == 0 || step < row || data.size() < static_cast<std::size_t>(step) * height)
     throw r.error("image of " + std::to_string(data.size()) + " bytes does not hold " +
                   std::to_string(width) + "x" + std::to_string(height) + " " + encoding + " with step " +
                   std::to_string(step));
-  const cv::Mat view(static_cast<int>(height), static_cast<int>(width), enc->type,
-                     const_cast<std::uint8_t*>(data.data()), step);
+  // Row by row into an image of its own: a message's step need not be a multiple of the pixel size
+  // (OpenCV refuses such a view) and its data need not be aligned for 16-bit pixels.
+  cv::Mat v(static_cast<int>(height), static_cast<int>(width), enc->type);
+  for (std::uint32_t y = 0; y < height; ++y)
+    std::memcpy(v.ptr(static_cast<int>(y)), data.data() + static_cast<std::size_t>(y) * step, row);
   cv::Mat gray;
   if (enc->type == CV_16UC1) {
-    cv::Mat v = view.clone();
     if (big_endian)
       v.forEach<std::uint16_t>(
           [](std::uint16_t& p, const int*) { p = static_cast<std::uint16_t>(p << 8 | p >> 8); });
     v.convertTo(gray, CV_8U, 1.0 / 256.0);
   } else if (enc->code >= 0) {
-    cv::cvtColor(view, gray, enc->code);
+    cv::cvtColor(v, gray, enc->code);
   } else {
-    gray = view.clone();
+    gray = v;
   }
   return gray;
 }

@@ -13,6 +13,7 @@
 #include "io/prophesee.hpp"
 #include "io/read_events.hpp"
 #include "io/ros_events.hpp"
+#include "io/ros_recording.hpp"
 #include "system/odometry_config_io.hpp"
 #include "test_data.hpp"
 
@@ -110,6 +111,25 @@ TEST(FuzzRegressions, EventPacketWithNoPayload) {
   EXPECT_EQ(e.x[0], 10);
   EXPECT_EQ(e.y[0], 5);
   EXPECT_EQ(e.p[0], 1);
+}
+
+// A mono16 image whose rows are an odd number of bytes apart: OpenCV refused the view of it with an
+// exception of its own (cv::Exception), which escaped the reader.
+TEST(FuzzRegressions, Mono16ImageWithAnOddStep) {
+  EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import rosbag, genpy' > /dev/null 2>&1") == 0,
+                        "Debian python3-rosbag, python3-genpy");
+  const fs::path dir = test::tempDir("fuzz_regressions_odd_step");
+  const std::string cmd =
+      "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --odd-step " + dir.string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  RosFrameLoader loader(dir / "odd_step.bag");
+  const cv::Mat img = loader.load(0);
+  ASSERT_EQ(img.type(), CV_8UC1);
+  ASSERT_EQ(img.cols, 4);
+  ASSERT_EQ(img.rows, 3);
+  // 16-bit values 256 * (10 y + x + 1) + 7 scale to 10 y + x + 1 (the 7 rounds away).
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) EXPECT_EQ(img.at<std::uint8_t>(y, x), 10 * y + x + 1) << x << "," << y;
 }
 
 }  // namespace

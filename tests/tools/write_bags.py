@@ -6,6 +6,7 @@ code).
 usage: write_bags.py SEQUENCE_DIR OUT_DIR MAX_EVENTS EVENTS_PER_MESSAGE [UNTIL_S [COMPRESSION]]
        write_bags.py --stereo SEQUENCE_DIR OUT_DIR UNTIL_S   (see write_stereo)
        write_bags.py --empty-packet OUT_DIR                  (see write_empty_packet)
+       write_bags.py --odd-step OUT_DIR                      (see write_odd_step)
 writes OUT_DIR/events_{none,bz2,lz4}.bag (dvs_msgs/EventArray on /dvs/events); with UNTIL_S also
 OUT_DIR/recording.bag (lz4 unless COMPRESSION says otherwise): the events, frames (sensor_msgs/Image mono8 on /dvs/image_raw), the
 calibration (sensor_msgs/CameraInfo on /dvs/camera_info) and the ground truth
@@ -164,6 +165,19 @@ def write_empty_packet(out_dir):
             bag.write("/events", msg, t=msg.header.stamp)
 
 
+def write_odd_step(out_dir):
+    """OUT_DIR/odd_step.bag: one mono16 sensor_msgs/Image of 4x3 pixels, little-endian, whose rows are
+    9 bytes apart (a padding byte 0xEE after each): pixel (x, y) holds 256 * (10 * y + x + 1) + 7."""
+    Image = CLASSES["sensor_msgs/Image"]
+    width, height, step = 4, 3, 9
+    data = b"".join(struct.pack("<4H", *(256 * (10 * y + x + 1) + 7 for x in range(width))) + b"\xee"
+                    for y in range(height))
+    with rosbag.Bag(f"{out_dir}/odd_step.bag", "w") as bag:
+        msg = Image(height=height, width=width, encoding="mono16", is_bigendian=0, step=step, data=data)
+        msg.header.stamp = rospy.Time(1, 0)
+        bag.write("/dvs/image_raw", msg, t=msg.header.stamp)
+
+
 def write_libcaer(seq_dir, out_dir, until):
     """OUT_DIR/libcaer.bag: the events up to UNTIL s as event_camera_msgs/EventPacket, encoding "libcaer"
     (8-byte events: data = x << 17 | y << 2 | polarity << 1 | valid, int32 low 31 bits of the sensor's us),
@@ -206,6 +220,9 @@ def main():
         return
     if sys.argv[1] == "--libcaer":
         write_libcaer(sys.argv[2], sys.argv[3], float(sys.argv[4]))
+        return
+    if sys.argv[1] == "--odd-step":
+        write_odd_step(sys.argv[2])
         return
     if sys.argv[1] == "--empty-packet":
         write_empty_packet(sys.argv[2])
