@@ -28,6 +28,15 @@ fs::path write(const std::string& name, const std::string& content) {
   return p;
 }
 
+// A folder holding the bag that tests/tools/write_bags.py writes with `option` (Debian's python3-rosbag).
+fs::path writeBag(const std::string& option, const std::string& name) {
+  const fs::path dir = test::tempDir("fuzz_regressions_" + name);
+  const std::string cmd =
+      "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py " + option + " " + dir.string();
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  return dir;
+}
+
 template <typename F>
 void expectInputError(F&& f, const fs::path& file, const std::string& fragment) {
   try {
@@ -101,10 +110,7 @@ TEST(FuzzRegressions, PlyVertexCountBeyondTheFile) {
 TEST(FuzzRegressions, EventPacketWithNoPayload) {
   EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import rosbag, genpy' > /dev/null 2>&1") == 0,
                         "Debian python3-rosbag, python3-genpy");
-  const fs::path dir = test::tempDir("fuzz_regressions_packet");
-  const std::string cmd =
-      "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --empty-packet " + dir.string();
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const fs::path dir = writeBag("--empty-packet", "packet");
   RosEventSource src(dir / "empty_packet.bag");
   const EventArray e = test::readAll(src, 100);
   ASSERT_EQ(e.size(), 1u);
@@ -118,11 +124,7 @@ TEST(FuzzRegressions, EventPacketWithNoPayload) {
 TEST(FuzzRegressions, Mono16ImageWithAnOddStep) {
   EDS_REQUIRE_AVAILABLE(std::system("/usr/bin/python3 -c 'import rosbag, genpy' > /dev/null 2>&1") == 0,
                         "Debian python3-rosbag, python3-genpy");
-  const fs::path dir = test::tempDir("fuzz_regressions_odd_step");
-  const std::string cmd =
-      "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py --odd-step " + dir.string();
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  RosFrameLoader loader(dir / "odd_step.bag");
+  RosFrameLoader loader(writeBag("--odd-step", "odd_step") / "odd_step.bag");
   const cv::Mat img = loader.load(0);
   ASSERT_EQ(img.type(), CV_8UC1);
   ASSERT_EQ(img.cols, 4);
