@@ -20,6 +20,20 @@ using test::allEvents;
 using test::expectSameOutputs;
 using test::syncConfig;
 
+// The first 1.4 s of `folder` and of the same recording in another format, run deterministically:
+// every output file the same byte for byte.
+void expectSameRuns(const Sequence& folder, const Sequence& other, const std::filesystem::path& out,
+                    const std::string& name) {
+  OdometryConfig cfg = syncConfig();
+  cfg.duration_s = 1.4;
+  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(other, cfg);
+  ASSERT_TRUE(a.initialized);
+  ASSERT_GT(a.events.size(), 30u);
+  writeOdometryOutputs(out / "folder", a, cfg);
+  writeOdometryOutputs(out / name, b, cfg);
+  expectSameOutputs(out / "folder", out / name);
+}
+
 // The ESIM sequence as a ROS 1 bag written by Debian's python3-rosbag (events, mono8 frames, CameraInfo,
 // PoseStamped ground truth; tests/tools/write_bags.py): the run over the bag is the run over the folder.
 TEST(RecordingRuns, EsimAsARosBagGivesByteIdenticalOutputs) {
@@ -31,8 +45,6 @@ TEST(RecordingRuns, EsimAsARosBagGivesByteIdenticalOutputs) {
   const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_bags.py " + dir.string() +
                           " " + out.string() + " 1000 2500 1.4";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  OdometryConfig cfg = syncConfig();
-  cfg.duration_s = 1.4;
   const Sequence folder(dir), bag(out / "recording.bag");
   EXPECT_EQ(bag.camera().fx, folder.camera().fx);
   EXPECT_EQ(bag.camera().cy, folder.camera().cy);
@@ -47,12 +59,7 @@ TEST(RecordingRuns, EsimAsARosBagGivesByteIdenticalOutputs) {
     ASSERT_EQ(gt_bag[i].t, gt_folder[i].t);
     ASSERT_EQ(gt_bag[i].T_w_c.matrix(), gt_folder[i].T_w_c.matrix()) << i;
   }
-  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(bag, cfg);
-  ASSERT_TRUE(a.initialized);
-  ASSERT_GT(a.events.size(), 30u);
-  writeOdometryOutputs(out / "folder", a, cfg);
-  writeOdometryOutputs(out / "bag", b, cfg);
-  expectSameOutputs(out / "folder", out / "bag");
+  expectSameRuns(folder, bag, out, "bag");
 }
 
 // The ESIM sequence in MVSEC's HDF5 layout, written by Debian's python3-h5py
@@ -65,8 +72,6 @@ TEST(RecordingRuns, EsimInTheMvsecHdf5LayoutGivesByteIdenticalOutputs) {
   const std::string cmd = "/usr/bin/python3 " EDS_SOURCE_DIR "/tests/tools/write_hdf5_layouts.py " +
                           dir.string() + " " + out.string() + " 1.4";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  OdometryConfig cfg = syncConfig();
-  cfg.duration_s = 1.4;
   const Sequence folder(dir);
   Sequence mvsec(out / "mvsec.h5");
   EXPECT_EQ(mvsec.format(), "MVSEC HDF5 (davis/left)");
@@ -76,11 +81,7 @@ TEST(RecordingRuns, EsimInTheMvsecHdf5LayoutGivesByteIdenticalOutputs) {
     ASSERT_EQ(mvsec.frames()[i].t, folder.frames()[i].t);
     ASSERT_EQ(cv::norm(mvsec.loadFrame(i), folder.loadFrame(i), cv::NORM_INF), 0.0) << i;
   }
-  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(mvsec, cfg);
-  ASSERT_TRUE(a.initialized);
-  writeOdometryOutputs(out / "folder", a, cfg);
-  writeOdometryOutputs(out / "mvsec", b, cfg);
-  expectSameOutputs(out / "folder", out / "mvsec");
+  expectSameRuns(folder, mvsec, out, "mvsec");
 }
 
 // The ESIM folder converted to eds's own HDF5 layout (nanosecond times, calibration and ground truth
@@ -102,13 +103,7 @@ TEST(RecordingRuns, EsimConvertedToEdsHdf5GivesByteIdenticalOutputs) {
     ASSERT_EQ(gt_h5[i].t, gt_folder[i].t);
     ASSERT_LT((gt_h5[i].T_w_c.matrix() - gt_folder[i].T_w_c.matrix()).norm(), 1e-14) << i;
   }
-  OdometryConfig cfg = syncConfig();
-  cfg.duration_s = 1.4;
-  const OdometryResult a = runOdometry(folder, cfg), b = runOdometry(h5, cfg);
-  ASSERT_TRUE(a.initialized);
-  writeOdometryOutputs(out / "folder", a, cfg);
-  writeOdometryOutputs(out / "h5", b, cfg);
-  expectSameOutputs(out / "folder", out / "h5");
+  expectSameRuns(folder, h5, out, "h5");
 }
 
 // The ESIM sequence as a rosbag2 MCAP file of ROS 2 (CDR) messages in zstd chunks
@@ -142,13 +137,7 @@ TEST(RecordingRuns, EsimAsMcapGivesByteIdenticalOutputs) {
     ASSERT_EQ(gt[i].t, gt_folder[i].t);
     ASSERT_EQ(gt[i].T_w_c.matrix(), gt_folder[i].T_w_c.matrix()) << i;
   }
-  OdometryConfig cfg = syncConfig();
-  cfg.duration_s = 1.4;
-  const OdometryResult ra = runOdometry(folder, cfg), rb = runOdometry(mcap, cfg);
-  ASSERT_TRUE(ra.initialized);
-  writeOdometryOutputs(out / "folder", ra, cfg);
-  writeOdometryOutputs(out / "mcap", rb, cfg);
-  expectSameOutputs(out / "folder", out / "mcap");
+  expectSameRuns(folder, mcap, out, "mcap");
 }
 
 // The layouts that keep microseconds (DSEC / TUM-VIE, VECtor with zstd, M3ED), written by python3-h5py
