@@ -7,10 +7,10 @@
 # Scenes of seed 1 are the tuning set; the seed-7 rows are kept aside (never tuned on).
 # Usage: bench/lowfps_table.sh [OUT_DIR]  (needs build/release and ../shared/data; JOBS=2 runs in
 # parallel; EDS_RUN_ARGS adds options to every `eds run`, e.g. "--sync-backend"; SCENES="desk_p0 ..."
-# picks rows, RATES="2 1" columns)
+# picks rows, RATES="2 1" columns; EDS=path/to/eds another build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-EDS=$PWD/build/release/eds
+EDS="${EDS:-$PWD/build/release/eds}"
 DATA="${EDS_SHARED_DATA:-../shared/data}"
 OUT="${1:-/tmp/eds_lowfps_table}"
 JOBS="${JOBS:-2}"

@@ -13,8 +13,8 @@ namespace eds {
 void BootstrapConfig::validate() const {
   points.validate();
   if (!(min_parallax_px > 0) || !(min_parallax_px_sparse > 0) || !(sparse_frame_interval_s > 0) ||
-      min_points < 1 || min_frames < 1 || max_frames <= min_frames || !(max_rmse > 0) ||
-      depth_prior_weight < 0 || final_views < 2)
+      min_points < 1 || min_frames < 1 || min_frames_sparse < 1 || max_frames <= min_frames ||
+      !(max_rmse > 0) || depth_prior_weight < 0 || final_views < 2)
     throw std::invalid_argument("bootstrap: bad configuration");
 }
 
@@ -210,7 +210,8 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
   }
   const bool sparse = t - frames_[frames_.size() - 2].t >= fromSeconds(cfg_.sparse_frame_interval_s);
   const double min_parallax = sparse ? cfg_.min_parallax_px_sparse : cfg_.min_parallax_px;
-  if (n_after < cfg_.min_frames || parallax_ < min_parallax || geo_state_ == GeoState::kPending) return false;
+  const int min_frames = sparse ? cfg_.min_frames_sparse : cfg_.min_frames;
+  if (n_after < min_frames || parallax_ < min_parallax || geo_state_ == GeoState::kPending) return false;
   // Each frame in between was fitted with the depths of its time, which moved on since (from 1 at the
   // start): aligned again to the final map, in its scale.
   realignFrames(t, frames_.back().T_ref_c, 1.0, frames_.size() - 1);

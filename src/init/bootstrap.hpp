@@ -43,9 +43,10 @@ struct BootstrapConfig {
   // second a frame, and a camera that mostly turns takes the reference out of view before it comes.
   double sparse_frame_interval_s = 0.4;
   double min_parallax_px_sparse = 4.0;
-  int min_points = 300;              // a reference needs this many selected points (texture)
-  int min_frames = 2;                // frames after the reference before success can be declared
-  int max_frames = 50;               // no success by then: the newest frame becomes the reference
+  int min_points = 300;       // a reference needs this many selected points (texture)
+  int min_frames = 2;         // frames after the reference before success can be declared
+  int min_frames_sparse = 1;  // the same when the frame came sparse_frame_interval_s or more after the last
+  int max_frames = 50;        // no success by then: the newest frame becomes the reference
   double max_parallax_step_px = 25;  // parallax growing faster than this per frame: diverged, restart
   double max_rmse = 0.05;            // two-frame residual RMS (intensity) above this: restart
   // |a| of the frame's affine brightness (I ≈ e^{-a} I_ref + b) above this: the alignment explained a
@@ -60,9 +61,9 @@ struct BootstrapConfig {
 };
 
 EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, final_views, depth_prior_weight, min_parallax_px,
-           sparse_frame_interval_s, min_parallax_px_sparse, min_points, min_frames, max_frames,
-           max_parallax_step_px, max_rmse, max_log_brightness, max_intensity, min_intensity, geometric,
-           geometric_init, fill)
+           sparse_frame_interval_s, min_parallax_px_sparse, min_points, min_frames, min_frames_sparse,
+           max_frames, max_parallax_step_px, max_rmse, max_log_brightness, max_intensity, min_intensity,
+           geometric, geometric_init, fill)
 
 struct BootstrapFrame {
   TimeNs t = 0;

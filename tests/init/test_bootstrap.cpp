@@ -152,6 +152,9 @@ TEST(Bootstrap, FlatFramesNeverInitializeAndBadConfigIsAnError) {
   BootstrapConfig one_view;
   one_view.final_views = 1;
   EXPECT_THROW(Bootstrap(camera(), one_view), std::invalid_argument);
+  BootstrapConfig no_frame;
+  no_frame.min_frames_sparse = 0;
+  EXPECT_THROW(Bootstrap(camera(), no_frame), std::invalid_argument);
 }
 
 }  // namespace

@@ -135,14 +135,16 @@ TEST(SimScenes, TurningRoomAtTwoFramesPerSecondInitializes) {
   EXPECT_GE(r.ate.coverage, 0.9);
 }
 
-// One frame a second while the camera turns back and forth: the bootstrap takes frames up to 3 s,
-// and the event frames buffered meanwhile are tracked between frames a second apart, each from the
-// previous one's pose (from the frames' interpolation, which the swing leaves far behind, 39 % of the
-// 4 s had a pose). Goal: ATE <= 2 cm; coverage (84 % measured) at least 80 %.
+// One frame a second while the camera turns back and forth. Frames this far apart may complete the
+// bootstrap one frame after its reference (measured 1.0 s; asking for two frames it took frames up to
+// 3 s, past the goal of 2 s). The event frames buffered meanwhile are tracked between frames a second
+// apart, each from the previous one's pose (from the frames' interpolation, which the swing leaves far
+// behind, 39 % of the 4 s had a pose). Goal: ATE <= 2 cm (0.358 measured); coverage (83.5 %) at least 80 %.
 TEST(SimScenes, TurningRoomAtOneFramePerSecondTracksTheBootstrapsEvents) {
   EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_shapes_rotation_groundtruth.txt");
   const TurningRoomRun r = runTurningRoom(traj_file, 4.0, 1);
   ASSERT_GE(r.init_after_s, 0) << "never initialized";
+  EXPECT_LE(r.init_after_s, 2.0 + 1e-6);
   EXPECT_LE(r.ate.trans.rmse * 100, 2.0);
   EXPECT_GE(r.ate.coverage, 0.8);
 }
