@@ -81,10 +81,13 @@ struct RecoveryConfig {
   // (segment) starts with a new bootstrap.
   int new_map_after_frames = 3;
   double new_map_after_s = 1.0;
+  // The event frames of the last this many seconds of a loss are kept and, once a frame relocalizes,
+  // tracked backwards from it (0: the time lost keeps no event pose).
+  double backfill_s = 2.0;
 };
 
 EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, relocalizer, new_map_after_frames,
-           new_map_after_s)
+           new_map_after_s, backfill_s)
 
 struct OdometryConfig {
   StreamConfig stream;
@@ -163,6 +166,8 @@ struct TrackLoss {
   TimeNs t_lost = 0, t_recovered = -1;
   std::string cause, recovery;
   int attempts = 0;  // frames tried
+  // Event frames of the time lost, tracked backwards from the frame that recovered the track.
+  std::size_t event_poses_backfilled = 0;
 };
 
 // A map of its own, with its own world frame and scale: the first from the first frame, a new one each

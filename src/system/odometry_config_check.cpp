@@ -29,10 +29,10 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
   const RecoveryConfig& r = cfg.recovery;
   const RelocalizerConfig& rl = r.relocalizer;
   if (!(r.gap_s > 0) || r.failed_frames < 1 || !(r.max_refinement > 0) || r.new_map_after_frames < 1 ||
-      !(r.new_map_after_s >= 0))
+      !(r.new_map_after_s >= 0) || !(r.backfill_s >= 0))
     throw std::invalid_argument(
         "Odometry: recovery.gap_s and max_refinement must be > 0, failed_frames and new_map_after_frames "
-        ">= 1, new_map_after_s >= 0");
+        ">= 1, new_map_after_s and backfill_s >= 0");
   if (rl.features < 4 || rl.min_inliers < 4 || rl.depth_radius_px < 1 || !(rl.ratio > 0 && rl.ratio <= 1) ||
       !(rl.ransac_px > 0) || !(rl.min_inlier_fraction >= 0 && rl.min_inlier_fraction <= 1))
     throw std::invalid_argument(

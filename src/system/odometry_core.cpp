@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "frontend/exposure_deblur.hpp"
+#include "system/backward_events.hpp"
 #include "system/run_stats.hpp"
 #include "system/trajectory_smoothing.hpp"
 
@@ -30,6 +31,14 @@ Trajectory refinedTrajectory(const Trajectory& traj, const std::vector<PoseAncho
       out[i].T_w_c = *kf->second * anchors[i].T_kf_c;
   }
   return out;
+}
+
+// Translation (m/s) and rotation (rad/s) from a to b over their time apart (0 when at the same time).
+std::pair<double, double> meanSpeed(const StampedPose& a, const StampedPose& b) {
+  if (b.t <= a.t) return {0.0, 0.0};
+  const SE3 move = a.T_w_c.inverse() * b.T_w_c;
+  const double span = toSeconds(b.t - a.t);
+  return {move.translation().norm() / span, move.so3().angle() / span};
 }
 
 }  // namespace
@@ -131,6 +140,7 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
   // The event pose is the frame's prior when an event frame was tracked close to the frame's time.
   const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
   const SE3 T_w_f = odo_->track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
+  if (found && cfg_.use_events) trackEventsSinceLoss(t, odo_->lastTrackOk() ? T_w_f : *found);
   res_.frames.push_back({t, T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * T_w_f});
   frame_ok_.push_back(odo_->lastTrackOk());
@@ -175,12 +185,31 @@ void OdometryCore::eventFrame(const EventFrame& ef) {
     return;
   }
   if (lost_) {
+    keepForBackfill(ef);
     res_.failures.push_back({ef.t, "event frame: the track is lost; waiting for a frame to relocalize"});
     return;
   }
   odo_->adoptReference(false);
   syncReference();
+  const std::size_t n_before = res_.events.size();
   trackEvents(ef, nullptr);
+  if (res_.events.size() == n_before)
+    keepForBackfill(ef);
+  else if (!buffered_.empty())
+    buffered_.clear();
+}
+
+// An event frame that gave no pose since the last one: kept (those of the last recovery.backfill_s)
+// to be tracked backwards if the track is lost and a frame relocalizes.
+void OdometryCore::keepForBackfill(const EventFrame& ef) {
+  const TimeNs t0 = std::max(ef.t - fromSeconds(cfg_.recovery.backfill_s), last_good_t_);
+  std::erase_if(buffered_, [t0](const EventFrame& b) { return b.t <= t0; });
+  if (buffered_.empty()) buffered_min_dt_ = 0;
+  if (!(cfg_.recovery.backfill_s > 0) || (!buffered_.empty() && ef.t - buffered_.back().t < buffered_min_dt_))
+    return;
+  buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
+  ef.delta.convertTo(buffered_.back().delta, CV_16F);
+  thinBuffered();
 }
 
 void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
@@ -235,11 +264,6 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   syncReference();
 }
 
-// A buffered event pose may move from the last accepted one at most this many times faster than the
-// frames around it do on average (3 dropped good poses where the camera went back and forth within a
-// second; 6 let more wrong ones through).
-constexpr double kMaxSpeedup = 4.0;
-
 // The event frames that arrived during the bootstrap, against its reference keyframe, each from the
 // bootstrap's pose at its time.
 void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
@@ -280,52 +304,55 @@ void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
   }
 }
 
-// The event frames buffered before the bootstrap's reference, tracked backwards from it (each from
-// the next one's pose) by an event front-end of their own. No frames bracket them: a pose that moves
-// from the last accepted one faster than kMaxSpeedup times the bootstrap frames' mean speed is a wrong
-// minimum, and the pass ends after kMaxRejected of them in a row. Their poses go before all others.
+// The event frames buffered before the bootstrap's reference, tracked backwards from it. Their
+// speed bound is the bootstrap frames' mean speed; their poses go before all others.
 void OdometryCore::trackEventsBeforeReference(const Keyframe& ref, const Trajectory& boot_traj) {
-  constexpr int kMaxRejected = 3;
   const TimeNs t_ref = boot_traj.front().t;
   if (boot_traj.size() < 2 || buffered_.empty() || buffered_.front().t >= t_ref) return;
   const ScopedStage stage(&clock_, Stage::kEventTracking);
-  EventFrontend back(und_.pinhole(), cfg_.events);
-  back.setReference(ref, SE3());
-  const SE3 move = boot_traj.front().T_w_c.inverse() * boot_traj.back().T_w_c;
-  const double speed_t = move.translation().norm() / toSeconds(boot_traj.back().t - t_ref);
-  const double speed_r = move.so3().angle() / toSeconds(boot_traj.back().t - t_ref);
-  StampedPose last = boot_traj.front();
-  Trajectory poses;
-  std::vector<TimeNs> last_t;
-  EventFrame ef;
-  int rejected = 0;
-  for (auto it = buffered_.rbegin(); it != buffered_.rend() && rejected < kMaxRejected; ++it) {
-    if (it->t >= t_ref) continue;
-    ef.t = it->t, ef.t_first = it->t_first, ef.t_last = it->t_last;
-    it->delta.convertTo(ef.delta, CV_32F);
-    std::string why;
-    const std::optional<SE3> T = back.track(ef, nullptr, &why);
-    const SE3 s = T ? last.T_w_c.inverse() * *T : SE3();
-    const double dt = kMaxSpeedup * toSeconds(last.t - ef.t);
-    if (T && (s.translation().norm() > dt * speed_t + cfg_.buffered_gate_translation ||
-              s.so3().angle() > dt * speed_r + cfg_.buffered_gate_rotation_deg * M_PI / 180.0))
-      why = "faster than the frames after it";
-    if (!why.empty()) {
-      res_.failures.push_back({ef.t, "event frame before the bootstrap's reference: " + why});
-      ++rejected;
-      continue;
-    }
-    rejected = 0;
-    last = {ef.t, *T};
-    poses.push_back(last);
-    last_t.push_back(ef.t_last);
+  const auto [speed_t, speed_r] = meanSpeed(boot_traj.front(), boot_traj.back());
+  const BackwardPass pass{&ref,
+                          SE3(),
+                          boot_traj.front(),
+                          std::numeric_limits<TimeNs>::min(),
+                          speed_t,
+                          speed_r,
+                          "event frame before the bootstrap's reference"};
+  trackEventsBackwards(buffered_, pass, und_.pinhole(), cfg_, res_);
+}
+
+// After a relocalization, the event frames kept while the track was lost, tracked backwards from the
+// frame that recovered it (at T_w_f) against the current reference, down to the last pose before the
+// loss. Their speed bound is the mean speed from that pose to the frame.
+void OdometryCore::trackEventsSinceLoss(TimeNs t, const SE3& T_w_f) {
+  TrackLoss& loss = res_.losses.back();
+  std::optional<StampedPose> before;  // the last pose, from an event frame or a frame, before the loss
+  if (!res_.events.empty() && res_.events.back().t <= loss.t_lost) before = res_.events.back();
+  for (std::size_t k = res_.frames.size(); k-- > 0;) {
+    if (res_.frames[k].t > loss.t_lost || !frame_ok_[k]) continue;
+    if (!before || res_.frames[k].t > before->t) before = res_.frames[k];
+    break;
   }
-  res_.events_tracked += poses.size();
-  for (std::size_t k = poses.size(); k-- > 0;) {
-    res_.events.push_back(poses[k]);
-    res_.event_last_t.push_back(last_t[k]);
-    res_.event_anchors.push_back({back.referenceId(), back.T_w_kf().inverse() * poses[k].T_w_c});
+  if (before && !buffered_.empty() && t > before->t) {
+    const ScopedStage stage(&clock_, Stage::kEventTracking);
+    // The speed bound: the mean speed over the time lost, or over the second before the loss where
+    // that was faster (a camera swinging back and forth moves little in the mean over seconds).
+    auto it = std::lower_bound(res_.events.begin(), res_.events.end(), before->t - fromSeconds(1.0),
+                               [](const StampedPose& p, TimeNs tt) { return p.t < tt; });
+    const StampedPose earlier = it != res_.events.end() && it->t < before->t ? *it : *before;
+    const auto [speed_t, speed_r] = meanSpeed(*before, {t, T_w_f});
+    const auto [speed_t0, speed_r0] = meanSpeed(earlier, *before);
+    const BackwardPass pass{&odo_->reference(),
+                            odo_->T_w_kf(),
+                            {t, T_w_f},
+                            before->t + 1,
+                            std::max(speed_t, speed_t0),
+                            std::max(speed_r, speed_r0),
+                            "event frame while the track was lost"};
+    loss.event_poses_backfilled = trackEventsBackwards(buffered_, pass, und_.pinhole(), cfg_, res_);
   }
+  buffered_.clear();
+  buffered_min_dt_ = 0;
 }
 
 // The track is lost after a gap with no pose from frames or events; while it is, each usable frame

@@ -57,6 +57,8 @@ class OdometryCore {
   void trackBufferedEvents(const Trajectory& boot_traj);
   void trackEventsBeforeReference(const Keyframe& ref, const Trajectory& boot_traj);
   bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found);
+  void trackEventsSinceLoss(TimeNs t, const SE3& T_w_f);
+  void keepForBackfill(const EventFrame& ef);
   void loseTrack(TimeNs t_last_pose, const std::string& cause);
   void startSegment(TimeNs t);
   void retireSegment();

@@ -295,7 +295,8 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
          {"t_recovered", l.t_recovered >= 0 ? nlohmann::json(toSeconds(l.t_recovered)) : nullptr},
          {"cause", l.cause},
          {"recovery", l.recovery},
-         {"frames_tried", l.attempts}});
+         {"frames_tried", l.attempts},
+         {"event_poses_backfilled", l.event_poses_backfilled}});
   j["losses"] = losses;
   nlohmann::json segments = nlohmann::json::array();
   for (const MapSegment& s : r.segments)

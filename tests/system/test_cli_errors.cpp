@@ -76,6 +76,8 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
   expectError("run " + esim() + runOut() + " --set no_such.parameter=1", "no_such.parameter");
   expectError("run " + esim() + runOut() + " --set recovery.gap_s=0",
               "recovery.gap_s and max_refinement must be > 0");
+  expectError("run " + esim() + runOut() + " --set recovery.backfill_s=-1",
+              "new_map_after_s and backfill_s >= 0");
   expectError("run " + esim() + runOut() + " --set recovery.relocalizer.min_inliers=3",
               "min_inliers >= 4 (a pose needs 4 points)");
   expectError("run " + esim() + runOut() + " --frame-rate -1", "must not be negative");
