@@ -5,10 +5,11 @@
 # at several frame rates, on the trajectories eds run writes (refined through the final keyframe poses).
 # Prints a markdown table; the real-time factor is the median of RUNS runs.
 # Usage: bench/odometry_table.sh [OUT_DIR]   (RUNS=3 by default; needs build/release and ../shared/data;
-# EDS_RUN_ARGS="--set KEY=VALUE ..." adds options to every `eds run`, for before/after tables)
+# EDS_RUN_ARGS="--set KEY=VALUE ..." adds options to every `eds run`, for before/after tables;
+# EDS=path runs another build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-EDS=build/release/eds
+EDS="${EDS:-build/release/eds}"
 DATA="${EDS_SHARED_DATA:-../shared/data}"
 OUT="${1:-/tmp/eds_odometry_table}"
 RUNS="${RUNS:-3}"

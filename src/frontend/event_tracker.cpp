@@ -8,6 +8,7 @@
 
 #include "core/image_sampling.hpp"
 #include "core/robust.hpp"
+#include "core/weighted_gram.hpp"
 
 namespace eds {
 
@@ -208,12 +209,18 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
   bool converged = false;
   for (int it = 0; it < cfg_.max_iterations && !converged; ++it) {
     ++done;
-    // Normal equations with the IRLS weights of the Huber norm, as two small GEMMs.
+    // Normal equations with the IRLS weights of the Huber norm (J is column-major: its columns are
+    // contiguous).
     w_.resize(r.size());
     for (Eigen::Index i = 0; i < r.size(); ++i) w_[i] = huberWeight(r[i], d);
-    JtW_ = (J.array().colwise() * w_.array()).matrix().transpose();
-    Eigen::Matrix<double, 12, 12> H = JtW_ * J;
-    Eigen::Matrix<double, 12, 1> g = JtW_ * r;
+    WJ_ = J.array().colwise() * w_.array();
+    wr_ = w_.cwiseProduct(r);
+    const double* cols[12];
+    const double* wcols[12];
+    for (int c = 0; c < 12; ++c) cols[c] = J.col(c).data(), wcols[c] = WJ_.col(c).data();
+    Eigen::Matrix<double, 12, 12> H = Eigen::Matrix<double, 12, 12>::Zero();
+    Eigen::Matrix<double, 12, 1> g = Eigen::Matrix<double, 12, 1>::Zero();
+    addWeightedGram<12>(cols, wcols, wr_.data(), static_cast<std::size_t>(r.size()), H, g);
     if (prior) accumulatePosePrior(*prior, data_var_, T_ef_kf, H, g);
     bool improved = false;
     for (int tries = 0; tries < 6 && !improved; ++tries) {

@@ -125,8 +125,10 @@ class EventTracker {
   mutable bool use_set_ = false;
   mutable Eigen::VectorXd m_, mh_;
   mutable Eigen::Matrix<double, Eigen::Dynamic, 6> D_, A_;
-  mutable Eigen::VectorXd w_, r_try_;  // a solve's weights and the residuals of a step being tried
-  mutable Eigen::MatrixXd J_try_, JtW_;
+  // A solve's weights, weighted residuals and weighted Jacobian; the residuals and Jacobian of a step
+  // being tried.
+  mutable Eigen::VectorXd w_, wr_, r_try_;
+  mutable Eigen::MatrixXd J_try_, WJ_;
 };
 
 }  // namespace eds

@@ -8,6 +8,7 @@
 
 #include "core/image_sampling.hpp"
 #include "core/robust.hpp"
+#include "core/weighted_gram.hpp"
 
 namespace eds {
 
@@ -17,6 +18,28 @@ namespace {
 constexpr double kLambdaInitial = 1e-3, kLambdaFloor = 1e-6;
 // DSO's residual pattern #8.
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
+
+// JᵀWJ and JᵀWr of n Jacobian rows of 8 (row-major), with the Huber weights of r: the rows go through in
+// blocks that fit the first-level cache, each turned into columns for core/weighted_gram.hpp.
+void normalEquations(const double* J, const double* r, std::size_t n, double huber,
+                     Eigen::Matrix<double, 8, 8>& H, Eigen::Matrix<double, 8, 1>& g) {
+  constexpr std::size_t kBlock = 64;
+  alignas(32) double col[8][kBlock], wcol[8][kBlock], wr[kBlock];
+  const double* cols[8];
+  const double* wcols[8];
+  for (int c = 0; c < 8; ++c) cols[c] = col[c], wcols[c] = wcol[c];
+  H.setZero(), g.setZero();
+  for (std::size_t b0 = 0; b0 < n; b0 += kBlock) {
+    const std::size_t m = std::min(kBlock, n - b0);
+    for (std::size_t i = 0; i < m; ++i) {
+      const double* row = J + (b0 + i) * 8;
+      const double w = huberWeight(r[b0 + i], huber);
+      for (int c = 0; c < 8; ++c) col[c][i] = row[c], wcol[c][i] = w * row[c];
+      wr[i] = w * r[b0 + i];
+    }
+    addWeightedGram<8>(cols, wcols, wr, m, H, g);
+  }
+}
 }  // namespace
 
 FrameTracker::FrameTracker(const CameraModel& pinhole, FrameTrackerConfig cfg) : cam_(pinhole), cfg_(cfg) {
@@ -115,9 +138,8 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
     return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
   };
   static_assert(sizeof(Eigen::Matrix<double, 1, 8>) == 8 * sizeof(double), "Jacobian rows must be packed");
-  using RowsMap = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 8, Eigen::RowMajor>>;
-  Eigen::VectorXd w;
-  Eigen::Matrix<double, Eigen::Dynamic, 8, Eigen::RowMajor> WJ;
+  Eigen::Matrix<double, 8, 8> H;
+  Eigen::Matrix<double, 8, 1> g;
   const int start = levels > 0 ? std::min(levels, cfg_.levels) - 1 : cfg_.levels - 1;
   for (int l = start; l >= 0; --l) {
     LmDamping lm(kLambdaInitial, kLambdaFloor);
@@ -125,14 +147,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
     if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
     double c0 = cost(r);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
-      // JᵀWJ and JᵀWr as two matrix products over all rows (the rows are contiguous in J).
-      const auto n = static_cast<Eigen::Index>(r.size());
-      const RowsMap Jm(J.data()->data(), n, 8);
-      w.resize(n);
-      for (Eigen::Index i = 0; i < n; ++i) w[i] = huberWeight(r[static_cast<std::size_t>(i)], d);
-      WJ.noalias() = w.asDiagonal() * Jm;
-      const Eigen::Matrix<double, 8, 8> H = Jm.transpose() * WJ;
-      const Eigen::Matrix<double, 8, 1> g = WJ.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), n);
+      normalEquations(J.data()->data(), r.data(), r.size(), d, H, g);
       bool improved = false;
       for (int tries = 0; tries < 5 && !improved; ++tries) {
         Eigen::MatrixXd Hs = H.topLeftCorner(np, np);

@@ -14,7 +14,7 @@ enum class Stage : std::size_t {
   kEventIntake,       // checking, flicker filtering and buffering new events
   kEventFrames,       // building event frames
   kEventTracking,     // event frames against the reference (and during the bootstrap)
-  kFramePreparation,  // frame quality check, undistortion
+  kFramePreparation,  // frame quality check, undistortion, waiting for the exposure estimate
   kFrameTracking,     // frame alignment and the keyframe decision
   kBootstrap,         // two-frame initialization
   kMapping,           // a new keyframe's points and depths
