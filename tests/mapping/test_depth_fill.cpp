@@ -95,5 +95,40 @@ TEST(DepthFill, MedianFilterRemovesNoiseAndKeepsADepthEdge) {
   EXPECT_THROW(medianFilterInverseDepth(px, wrong, 6.0), std::invalid_argument);
 }
 
+// Every point within the radius and no other, wherever it lies: against all pairs, on points at
+// fractional positions, on a pixel grid whose neighbours sit exactly at the radius (left out: the bound
+// is strict), and at negative coordinates.
+TEST(DepthFill, MedianFilterTakesExactlyThePointsWithinTheRadius) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> pos(-20.f, 200.f);
+  std::uniform_real_distribution<double> depth(0.2, 2.0);
+  std::vector<cv::Point2f> px;
+  for (int i = 0; i < 1500; ++i) px.emplace_back(pos(rng), pos(rng) * 0.5f);
+  for (int y = 0; y < 40; y += 4)
+    for (int x = 0; x < 40; x += 4) px.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  std::vector<double> rho(px.size());
+  for (double& r : rho) r = depth(rng);
+  rho[7] = 0.0;
+  for (const double radius : {4.0, 6.5}) {
+    std::vector<double> expected = rho;
+    const float r2 = static_cast<float>(radius * radius);
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      if (!(rho[i] > 0)) continue;
+      std::vector<double> near;
+      for (std::size_t j = 0; j < px.size(); ++j) {
+        const float du = px[i].x - px[j].x, dv = px[i].y - px[j].y;
+        if (rho[j] > 0 && du * du + dv * dv < r2) near.push_back(rho[j]);
+      }
+      std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
+      expected[i] = near[near.size() / 2];
+    }
+    std::vector<double> got = rho;
+    std::vector<cv::Point2f> uv = px;
+    medianFilterInverseDepth(uv, got, radius);
+    for (std::size_t i = 0; i < px.size(); ++i)
+      ASSERT_EQ(got[i], expected[i]) << "point " << i << " radius " << radius;
+  }
+}
+
 }  // namespace
 }  // namespace eds
