@@ -266,7 +266,7 @@ class Odometry::Impl {
     if (f.recorded > 0) useRecordedExposure(f.recorded);
     // The exposure estimator scores its frame pairs on another thread while this one tracks the frame.
     // The tracking does not read the estimator's state, and nothing else runs here before the join, so
-    // the outputs are those of scoring first (a tenth of the tracking thread's time on short runs).
+    // the outputs are those of scoring first.
     std::future<void> scoring;
     if (estimator_)
       scoring = std::async(std::launch::async, [this, &f] { estimator_->addFrame(f.t, f.image); });
