@@ -80,7 +80,8 @@ bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image) {
   // motion of a scene with depth (a hand-held camera shaking before it translates), and a verdict
   // taken then would let the constant-depth photometric path succeed on a 3D scene.
   geo_state_ = GeoState::kPending;
-  const std::optional<GeometricInitResult> g = geo_.add(image);
+  const bool sparse = !frames_.empty() && t - frames_.back().t >= fromSeconds(cfg_.sparse_frame_interval_s);
+  const std::optional<GeometricInitResult> g = geo_.add(image, sparse);
   if (g && g->planar) geo_state_ = GeoState::kPlanar;
   if (g && logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg",

@@ -28,7 +28,7 @@ void GeometricInit::reset(const cv::Mat& ref_image) {
   cur_ = ref_;
 }
 
-std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
+std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse) {
   if (prev_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
   const cv::Mat gray = toGray8(image);
   std::vector<cv::Point2f> next, back;
@@ -61,7 +61,7 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
 
   const cv::Matx33d K(cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1);
   cv::Mat mask_e, mask_h;
-  const cv::Mat E = cv::findEssentialMat(ref_, cur_, K, cv::RANSAC, 0.999, cfg_.ransac_px, mask_e);
+  cv::Mat E = cv::findEssentialMat(ref_, cur_, K, cv::RANSAC, 0.999, cfg_.ransac_px, mask_e);
   const cv::Mat Hm = cv::findHomography(ref_, cur_, cv::RANSAC, cfg_.ransac_px, mask_h);
   GeometricInitResult res;
   if (E.rows != 3 || E.cols != 3) {  // several solutions or none: not this frame
@@ -74,9 +74,16 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   cv::Mat R, t;
   res.inliers = cv::recoverPose(E, ref_, cur_, K, R, t, mask_e);
   if (res.inliers < cfg_.min_tracks) {
+    // Most of RANSAC's inliers behind a camera: with a dominant far plane many essential matrices fit
+    // the tracks about as well, and RANSAC's first consensus can be one of the wrong ones. MAGSAC++
+    // scores every hypothesis by all residuals and refines it, which separates them.
     logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers (RANSAC %d, homography %d)", res.inliers,
          n_e, n_h);
-    return std::nullopt;
+    E = cv::findEssentialMat(ref_, cur_, K, cv::USAC_MAGSAC, 0.999, cfg_.ransac_px, mask_e);
+    if (E.rows != 3 || E.cols != 3) return std::nullopt;
+    res.inliers = cv::recoverPose(E, ref_, cur_, K, R, t, mask_e);
+    logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers by MAGSAC++", res.inliers);
+    if (res.inliers < cfg_.min_tracks) return std::nullopt;
   }
   Mat3 Re;
   for (int r = 0; r < 3; ++r)
@@ -109,7 +116,7 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image) {
   if (static_cast<int>(res.points.size()) < cfg_.min_tracks) return std::nullopt;
   std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
   res.parallax_deg = angles[angles.size() / 2] * 180.0 / M_PI;
-  if (res.parallax_deg < cfg_.min_parallax_deg) {
+  if (res.parallax_deg < (sparse ? cfg_.min_parallax_deg_sparse : cfg_.min_parallax_deg)) {
     logf(LogLevel::kDebug, "bootstrap: median triangulation angle %.2f deg", res.parallax_deg);
     return std::nullopt;
   }

@@ -1,7 +1,7 @@
 #pragma once
 // The geometric fallback of the bootstrap: corners of the reference frame (Shi-Tomasi) are tracked
 // frame to frame by pyramidal Lucas-Kanade with a forward-backward check; once their median flow is
-// large enough, an essential matrix (RANSAC) gives the relative pose and triangulation the depths.
+// large enough, an essential matrix (MAGSAC++) gives the relative pose and triangulation the depths.
 // A homography that explains nearly as many tracks as the essential matrix means a planar (or
 // rotation-only) configuration, where the essential matrix degenerates: the result says so and the
 // caller keeps the photometric initializer, which handles planes.
@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/reflect.hpp"
 #include "core/se3.hpp"
 #include "mapping/depth_fill.hpp"
-#include "core/reflect.hpp"
 
 namespace eds {
 
@@ -26,9 +26,13 @@ struct GeometricInitConfig {
   double planar_ratio = 0.9;      // homography inliers ≥ this × essential inliers: planar
   double max_reproj_px = 2.0;     // triangulated points must reproject this well in both frames
   double min_parallax_deg = 1.5;  // median angle between the two rays of the triangulated points
+  // The same for a frame that came long after the one before: waiting a second more for parallax
+  // costs more than a slightly narrower baseline.
+  double min_parallax_deg_sparse = 1.0;
 };
 
-EDS_FIELDS(GeometricInitConfig, max_features, quality, min_distance, min_flow_px, min_tracks, ransac_px, planar_ratio, max_reproj_px, min_parallax_deg)
+EDS_FIELDS(GeometricInitConfig, max_features, quality, min_distance, min_flow_px, min_tracks, ransac_px,
+           planar_ratio, max_reproj_px, min_parallax_deg, min_parallax_deg_sparse)
 
 struct GeometricInitResult {
   bool planar = false;
@@ -43,8 +47,9 @@ class GeometricInit {
   GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg);
   // Starts over with a new reference (undistorted, CV_32F in [0, 1]).
   void reset(const cv::Mat& ref_image);
-  // Tracks the corners into the next frame; a result once the flow is large enough.
-  std::optional<GeometricInitResult> add(const cv::Mat& image);
+  // Tracks the corners into the next frame; a result once the flow is large enough. `sparse`: the frame
+  // came long after the one before (the sparse parallax bound applies).
+  std::optional<GeometricInitResult> add(const cv::Mat& image, bool sparse = false);
   int tracks() const { return static_cast<int>(cur_.size()); }
 
  private:

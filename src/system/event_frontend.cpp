@@ -203,14 +203,16 @@ std::optional<SE3> EventFrontend::trackBetween(const EventFrame& ef, TimeNs t_a,
   const MotionPriorConfig& mc = cfg_.motion_prior;
   // Both ends are measured: the interpolation's own error is the acceleration's, largest midway.
   motion.sigma = priorSigma(std::sqrt(s * (1 - s)) * span, 1.0);
-  // The solve starts from the last event frame's pose when that lies between the same frames: where
-  // the camera swings between frames a second apart, the interpolation is far from it; the prior
-  // still pulls towards the interpolation.
+  // The solve starts from the last event frame's pose when that lies between the same frames, else
+  // from the nearer frame's: where the camera swings or starts from rest between frames a second
+  // apart, the interpolation is far from either; the prior still pulls towards the interpolation.
   const bool from_last = !corrected_ && t_last_ >= t_a && t_last_ < ef.t;
   corrected_ = false;
   // Frames farther apart than max_gap_s say too little about the motion in between (as in track()).
   const bool use_motion = mc.enabled && span <= mc.max_gap_s;
-  return solve(ef, from_last ? T_ef_kf_ : motion.T_ef_kf, 0, use_motion ? &motion : nullptr, failure);
+  const SE3 T_w_near = s <= 0.5 ? T_w_a : T_w_b;
+  return solve(ef, from_last ? T_ef_kf_ : T_w_near.inverse() * T_w_kf_, 0, use_motion ? &motion : nullptr,
+               failure);
 }
 
 std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init, int levels,

@@ -83,32 +83,59 @@ TEST(SimScenes, DeskEventsAndFrames) { runScene("desk", Mode::kEvents, 0, {0.051
 TEST(SimScenes, DeskFramesOnly) { runScene("desk", Mode::kFrames, 0, {0.061, 0.061}); }
 TEST(SimScenes, DeskEventsAndFramesAt5Hz) { runScene("desk", Mode::kEvents, 5, {0.067, 0.055}); }
 
-// One frame a second over the first 4 s of the room: the bootstrap has frames 1 s apart and the events
-// carry the camera between them (the event frames since the first frame are tracked once the map
-// exists). Goal: ATE <= 2 cm, coverage of the 4 s >= 90 %. The rotation RMSE is the sim3 alignment's
-// on a short, slow start of the path (its mean equals its RMSE): not checked beyond the goal.
-TEST(SimScenes, RoomAtOneFramePerSecond) {
-  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
-  const Sequence seq(sceneSequence("room", traj_file));
+struct FirstSeconds {
+  double init_after_s = -1;
+  eval::AteResult ate;
+};
+
+// One frame a second over the first 4 s of the preset's scene (synchronous back-end): the bootstrap has
+// frames 1 s apart and the events carry the camera between them (the event frames since the first
+// frame are tracked once the map exists). The event-rate poses of those 4 s.
+FirstSeconds runFirstSecondsAtOneFramePerSecond(const std::string& preset,
+                                                const std::filesystem::path& traj_file) {
+  const Sequence seq(sceneSequence(preset, traj_file));
   OdometryConfig cfg;
   cfg.frame_rate = 1;
   cfg.duration_s = 4;
   cfg.threaded_backend = false;
   const OdometryResult r = runOdometry(seq, cfg);
-  ASSERT_TRUE(r.initialized);
-  EXPECT_LE(toSeconds(r.init_t - r.first_t), 2.0 + 1e-6);
+  if (!r.initialized) return {};
   Trajectory gt = seq.groundTruth();
   std::erase_if(gt, [&](const StampedPose& p) { return p.t > r.first_t + fromSeconds(4.0); });
-  const eval::AteResult a = eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{});
+  FirstSeconds out{toSeconds(r.init_t - r.first_t),
+                   eval::evaluateAte(r.events_refined, gt, eval::EvalConfig{})};
   std::printf(
-      "[ room, 4 s, 1 frame/s ] initialized after %.2f s; ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
-      toSeconds(r.init_t - r.first_t), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100);
-  // 1.2x rather than the usual 1.5x (the run is deterministic). Measured 0.320 cm; without the bound
-  // on how fast buffered event poses may move it is 0.314 cm here (the bound matters on the turning
-  // desk at 1 FPS instead).
-  EXPECT_LE(a.trans.rmse * 100, 1.2 * 0.320);
-  EXPECT_LE(a.trans.rmse * 100, 2.0);
-  EXPECT_GE(a.coverage, 0.9);
+      "[ %s, 4 s, 1 frame/s ] initialized after %.2f s; ATE %.3f cm, rot %.3f deg, coverage %.1f %%\n",
+      preset.c_str(), out.init_after_s, out.ate.trans.rmse * 100, out.ate.rot.rmse, out.ate.coverage * 100);
+  return out;
+}
+
+// Goal: initialized within 2 s, ATE <= 2 cm, coverage of the 4 s >= 90 %. The rotation RMSE is the sim3
+// alignment's on a short, slow start of the path (its mean equals its RMSE): not checked beyond the goal.
+TEST(SimScenes, RoomAtOneFramePerSecond) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const FirstSeconds r = runFirstSecondsAtOneFramePerSecond("room", traj_file);
+  ASSERT_GE(r.init_after_s, 0) << "never initialized";
+  // The essential matrix at 1 s has a median triangulation angle of 1.37 deg: enough for frames a second
+  // apart (asking for the video rates' 1.5 deg it waited for the frame at 2 s).
+  EXPECT_LE(r.init_after_s, 1.0 + 1e-6);
+  // 1.2x rather than the usual 1.5x (the run is deterministic). Measured 0.754 cm (0.320 initialized
+  // at 2 s).
+  EXPECT_LE(r.ate.trans.rmse * 100, 1.2 * 0.754);
+  EXPECT_GE(r.ate.coverage, 0.9);
+}
+
+// The desk: near objects before a far wall that most corners lie on. RANSAC's essential matrix at 1 s
+// kept 30 of its 194 inliers in front of both cameras (never initialized over the 4 s); MAGSAC++ keeps
+// them all. The event frames of that first second start from the nearer frame's pose (from the
+// frames' interpolation, 2-3 cm off while the camera starts from rest, 74 % coverage). Same goal.
+TEST(SimScenes, DeskAtOneFramePerSecond) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const FirstSeconds r = runFirstSecondsAtOneFramePerSecond("desk", traj_file);
+  ASSERT_GE(r.init_after_s, 0) << "never initialized";
+  EXPECT_LE(r.init_after_s, 2.0 + 1e-6);
+  EXPECT_LE(r.ate.trans.rmse * 100, 2.0);
+  EXPECT_GE(r.ate.coverage, 0.9);
 }
 
 struct TurningRoomRun {
