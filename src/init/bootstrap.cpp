@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <future>
 #include <stdexcept>
 
 #include "core/log.hpp"
@@ -104,11 +105,14 @@ bool Bootstrap::alignToReference(const cv::Mat& image, const SE3* hint, SE3& T_c
   alpha = std::exp(frames_.back().a), beta = frames_.back().b;
   FrameTracker tracker(cam_, cfg_.tracker);
   tracker.setKeyframe(ref_);
+  // The two starts at once: before the first keyframe the back-end's core is free.
+  SE3 T_h = hint ? *hint : SE3();
+  double a_h = alpha, b_h = beta;
+  std::future<FrameTrackResult> hinted;
+  if (hint) hinted = std::async(std::launch::async, [&] { return tracker.track(image, T_h, a_h, b_h); });
   FrameTrackResult tr = tracker.track(image, T_c_ref, alpha, beta);
   if (hint) {
-    SE3 T_h = *hint;
-    double a_h = std::exp(frames_.back().a), b_h = frames_.back().b;
-    const FrameTrackResult tr_h = tracker.track(image, T_h, a_h, b_h);
+    const FrameTrackResult tr_h = hinted.get();
     if (tr_h.ok && a_h > 0 && (!tr.ok || !(alpha > 0) || tr_h.rmse < tr.rmse)) {
       T_c_ref = T_h, alpha = a_h, beta = b_h, tr = tr_h;
       if (logEnabled(LogLevel::kDebug))
@@ -265,16 +269,24 @@ void Bootstrap::realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale
         (T_prev_result * step).inverse(),
         interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
             .inverse()};
+    // Both starts at once (as in alignToReference), then the same choice as one after the other.
+    SE3 T_track[2] = {candidates[0], candidates[1]};
+    double alpha[2], beta[2];
+    FrameTrackResult tr[2];
+    const auto run = [&](int c) {
+      alpha[c] = std::exp(frames_[k].a), beta[c] = frames_[k].b;
+      tr[c] = tracker.track(images_[k], T_track[c], alpha[c], beta[c]);
+    };
+    std::future<void> second = std::async(std::launch::async, run, 1);
+    run(0);
+    second.get();
     BootstrapFrame best{frames_[k].t, candidates[0].inverse(), frames_[k].a, frames_[k].b};
     double best_rmse = 1e9;
     int won = -1;
     for (int c = 0; c < 2; ++c) {
-      double alpha = std::exp(frames_[k].a), beta = frames_[k].b;
-      SE3 T_track = candidates[c];
-      const FrameTrackResult tr = tracker.track(images_[k], T_track, alpha, beta);
-      if (tr.ok && alpha > 0 && tr.rmse < best_rmse) {
-        best_rmse = tr.rmse, won = c;
-        best = {frames_[k].t, T_track.inverse(), std::log(alpha), beta};
+      if (tr[c].ok && alpha[c] > 0 && tr[c].rmse < best_rmse) {
+        best_rmse = tr[c].rmse, won = c;
+        best = {frames_[k].t, T_track[c].inverse(), std::log(alpha[c]), beta[c]};
       }
     }
     if (logEnabled(LogLevel::kDebug))

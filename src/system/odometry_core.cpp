@@ -9,6 +9,7 @@
 
 #include "frontend/exposure_deblur.hpp"
 #include "system/backward_events.hpp"
+#include "system/buffered_gate.hpp"
 #include "system/run_stats.hpp"
 #include "system/trajectory_smoothing.hpp"
 
@@ -273,33 +274,12 @@ void OdometryCore::trackBufferedEvents(const Trajectory& boot_traj) {
     if (half.t < boot_traj.front().t) continue;
     ef.t = half.t, ef.t_first = half.t_first, ef.t_last = half.t_last;
     half.delta.convertTo(ef.delta, CV_32F);
-    const SE3 prior = poseAt(boot_traj, ef.t);
-    // The frames bracket each of these event frames: a result far from their interpolation (more
-    // than half the motion between the two frames, plus a margin) is a wrong minimum, not motion.
-    const auto it = std::lower_bound(boot_traj.begin(), boot_traj.end(), ef.t,
-                                     [](const StampedPose& p, TimeNs t) { return p.t < t; });
-    const SE3& A = it == boot_traj.begin() ? it->T_w_c : (it - 1)->T_w_c;
-    const SE3& B = it == boot_traj.end() ? (it - 1)->T_w_c : it->T_w_c;
-    const SE3 AB = A.inverse() * B;
-    const double max_t = 0.5 * AB.translation().norm() + cfg_.buffered_gate_translation;
-    const double max_r = 0.5 * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
-    const bool between = it != boot_traj.begin() && it != boot_traj.end();
-    // Nor may it move from the last accepted pose faster than kMaxSpeedup times the frames' mean speed:
-    // frames a second apart leave the first gate wide, and a wrong minimum is a jump.
-    if (between && (it - 1)->t > last.t) last = *(it - 1);
-    const double span = between ? toSeconds(it->t - (it - 1)->t) : 0.0;
-    const double f = span > 0 ? kMaxSpeedup * toSeconds(ef.t - last.t) / span : 0.0;
-    const double step_t = f * AB.translation().norm() + cfg_.buffered_gate_translation;
-    const double step_r = f * AB.so3().angle() + cfg_.buffered_gate_rotation_deg * M_PI / 180.0;
+    const BufferedEventGate gate(boot_traj, ef.t, last, cfg_.buffered_gate_translation,
+                                 cfg_.buffered_gate_rotation_deg * M_PI / 180.0);
+    last = gate.last();
+    const SE3 prior = gate.interpolated();
     const std::size_t n_before = res_.events.size();
-    trackEvents(
-        ef, &prior,
-        [&](const SE3& T) {
-          const SE3 d = prior.inverse() * T, s = last.T_w_c.inverse() * T;
-          return d.translation().norm() <= max_t && d.so3().angle() <= max_r &&
-                 (!between || (s.translation().norm() <= step_t && s.so3().angle() <= step_r));
-        },
-        between ? std::make_pair(&*(it - 1), &*it) : std::pair<const StampedPose*, const StampedPose*>{});
+    trackEvents(ef, &prior, [&](const SE3& T) { return gate.accepts(T); }, {gate.before(), gate.after()});
     if (res_.events.size() > n_before) last = res_.events.back();
   }
 }
