@@ -1,7 +1,8 @@
 #pragma once
 // The geometric fallback of the bootstrap: corners of the reference frame (Shi-Tomasi) are tracked
 // frame to frame by pyramidal Lucas-Kanade with a forward-backward check; once their median flow is
-// large enough, an essential matrix (MAGSAC++) gives the relative pose and triangulation the depths.
+// large enough, an essential matrix (RANSAC; MAGSAC++ when RANSAC's leaves too few tracks in front of
+// both cameras) gives the relative pose and triangulation the depths.
 // A homography that explains nearly as many tracks as the essential matrix means a planar (or
 // rotation-only) configuration, where the essential matrix degenerates: the result says so and the
 // caller keeps the photometric initializer, which handles planes.
