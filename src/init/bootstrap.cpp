@@ -253,10 +253,11 @@ void Bootstrap::normalizeScale() {
   images_ = {};
 }
 
-void Bootstrap::realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count) {
+void Bootstrap::realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count,
+                              const std::vector<std::optional<SE3>>& T_ref_c_tracks) {
   // Starting points: the previous frame's result moved by the relative motion the frames had before
-  // (translation times `scale`), and the geodesic between the reference and the last frame; the
-  // better fit wins.
+  // (translation times `scale`), the geodesic between the reference and the last frame, and the pose
+  // the corner tracks give (where there is one); the best fit wins.
   FrameTracker tracker(cam_, cfg_.tracker);
   tracker.setKeyframe(ref_);
   const double span = static_cast<double>(t_last - frames_.front().t);
@@ -265,39 +266,45 @@ void Bootstrap::realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale
   for (std::size_t k = 1; k < count; ++k) {
     SE3 step = before[k - 1].T_ref_c.inverse() * before[k].T_ref_c;
     step.translation() *= scale;
-    const SE3 candidates[2] = {
+    std::vector<SE3> starts = {
         (T_prev_result * step).inverse(),
         interpolateGeodesic(SE3(), T_ref_last, static_cast<double>(frames_[k].t - frames_.front().t) / span)
             .inverse()};
-    // Both starts at once (as in alignToReference), then the same choice as one after the other.
-    SE3 T_track[2] = {candidates[0], candidates[1]};
-    double alpha[2], beta[2];
-    FrameTrackResult tr[2];
-    const auto run = [&](int c) {
-      alpha[c] = std::exp(frames_[k].a), beta[c] = frames_[k].b;
-      tr[c] = tracker.track(images_[k], T_track[c], alpha[c], beta[c]);
-    };
-    std::future<void> second = std::async(std::launch::async, run, 1);
-    run(0);
-    second.get();
-    BootstrapFrame best{frames_[k].t, candidates[0].inverse(), frames_[k].a, frames_[k].b};
-    double best_rmse = 1e9;
-    int won = -1;
-    for (int c = 0; c < 2; ++c) {
-      if (tr[c].ok && alpha[c] > 0 && tr[c].rmse < best_rmse) {
-        best_rmse = tr[c].rmse, won = c;
-        best = {frames_[k].t, T_track[c].inverse(), std::log(alpha[c]), beta[c]};
-      }
-    }
-    if (logEnabled(LogLevel::kDebug))
-      logf(LogLevel::kDebug, "bootstrap: frame %zu aligned to the map: %s, rmse %.4f", k,
-           won < 0    ? "failed from both starts"
-           : won == 0 ? "from the motion"
-                      : "from the geodesic",
-           best_rmse);
-    frames_[k] = best;
-    T_prev_result = best.T_ref_c;
+    if (k - 1 < T_ref_c_tracks.size() && T_ref_c_tracks[k - 1])
+      starts.push_back(T_ref_c_tracks[k - 1]->inverse());
+    alignFromStarts(tracker, k, starts);
+    T_prev_result = frames_[k].T_ref_c;
   }
+}
+
+void Bootstrap::alignFromStarts(const FrameTracker& tracker, std::size_t k, const std::vector<SE3>& starts) {
+  // All starts at once (as in alignToReference), then the same choice as one after the other.
+  const std::size_t n = starts.size();
+  std::vector<SE3> T_track = starts;
+  std::vector<double> alpha(n, std::exp(frames_[k].a)), beta(n, frames_[k].b);
+  std::vector<FrameTrackResult> tr(n);
+  const auto run = [&](std::size_t c) { tr[c] = tracker.track(images_[k], T_track[c], alpha[c], beta[c]); };
+  std::vector<std::future<void>> others;
+  for (std::size_t c = 1; c < n; ++c) others.push_back(std::async(std::launch::async, run, c));
+  run(0);
+  for (std::future<void>& f : others) f.get();
+  BootstrapFrame best{frames_[k].t, starts[0].inverse(), frames_[k].a, frames_[k].b};
+  double best_rmse = 1e9;
+  int won = -1;
+  for (std::size_t c = 0; c < n; ++c) {
+    if (tr[c].ok && alpha[c] > 0 && tr[c].rmse < best_rmse) {
+      best_rmse = tr[c].rmse, won = static_cast<int>(c);
+      best = {frames_[k].t, T_track[c].inverse(), std::log(alpha[c]), beta[c]};
+    }
+  }
+  frames_[k] = best;
+  if (logEnabled(LogLevel::kDebug))
+    logf(LogLevel::kDebug, "bootstrap: frame %zu aligned to the map: %s, rmse %.4f", k,
+         won < 0    ? "failed from every start"
+         : won == 0 ? "from the motion"
+         : won == 1 ? "from the geodesic"
+                    : "from the corner tracks",
+         best_rmse);
 }
 
 void Bootstrap::refineWithViews(const cv::Mat& last_image) {
@@ -388,8 +395,17 @@ bool Bootstrap::initFromGeometry(TimeNs t, const cv::Mat& image, const Geometric
   // the geometric translation.
   const SE3 T_ref_last = fr[1].T_w_c;
   const double photo_len = frames_.back().T_ref_c.translation().norm();
+  // The corner tracks' poses are in the triangulation's scale, which the adjustment changed.
+  std::vector<std::optional<SE3>> T_ref_c_tracks;
+  if (g.T_c_ref_before.size() + 1 == frames_.size())
+    for (const std::optional<SE3>& T : g.T_c_ref_before) {
+      T_ref_c_tracks.push_back(T ? std::optional<SE3>(T->inverse()) : std::nullopt);
+      if (T)
+        T_ref_c_tracks.back()->translation() *=
+            T_ref_last.translation().norm() / g.T_c_ref.translation().norm();
+    }
   realignFrames(t, T_ref_last, photo_len > 1e-9 ? T_ref_last.translation().norm() / photo_len : 1.0,
-                frames_.size());
+                frames_.size(), T_ref_c_tracks);
   frames_.push_back({t, T_ref_last, fr[1].a, fr[1].b});
   parallax_ = translationParallax(T_ref_last.inverse());
   refineWithViews(image);

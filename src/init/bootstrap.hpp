@@ -112,7 +112,10 @@ class Bootstrap {
   void normalizeScale();
   // Frames 1 .. count-1 (their images kept) aligned to the reference's current map; the frames'
   // present poses give the starts, their translations times `scale`; the last frame is at T_ref_last.
-  void realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count);
+  void realignFrames(TimeNs t_last, const SE3& T_ref_last, double scale, std::size_t count,
+                     const std::vector<std::optional<SE3>>& T_ref_c_tracks = {});
+  // Aligns frame k to the map from each start (motion, geodesic, corner tracks); keeps the best fit.
+  void alignFromStarts(const FrameTracker& tracker, std::size_t k, const std::vector<SE3>& starts);
   // The reference's depths and final_views - 1 of the frames since (the last one, image `last_image`,
   // among them) in one bundle adjustment; then every frame but the last (those in it as well) aligned
   // again to its depths.

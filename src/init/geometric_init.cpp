@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -26,9 +27,15 @@ void GeometricInit::reset(const cv::Mat& ref_image) {
   ref_.clear();
   cv::goodFeaturesToTrack(prev_, ref_, cfg_.max_features, cfg_.quality, cfg_.min_distance);
   cur_ = ref_;
+  corners_ = ref_.size();
+  ids_.resize(ref_.size());
+  for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = static_cast<int>(i);
+  seen_.clear();
 }
 
 std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  seen_.emplace_back(corners_, cv::Point2f(nan, nan));
   if (prev_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
   const cv::Mat gray = toGray8(image);
   std::vector<cv::Point2f> next, back;
@@ -45,10 +52,13 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
     if (!st[i] || !st_back[i] || !inside || cv::norm(back[i] - cur_[i]) > 0.5) continue;
     ref_[k] = ref_[i];
     cur_[k] = next[i];
+    ids_[k] = ids_[i];
+    seen_.back()[ids_[k]] = next[i];
     ++k;
   }
   ref_.resize(k);
   cur_.resize(k);
+  ids_.resize(k);
   prev_ = gray;
   if (static_cast<int>(k) < cfg_.min_tracks) return std::nullopt;
   std::vector<double> flow(k);
@@ -91,6 +101,8 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
   const Vec3 te(t.at<double>(0), t.at<double>(1), t.at<double>(2));
   res.T_c_ref = SE3(Quat(Re).normalized(), te);
   std::vector<double> angles;
+  std::vector<int> triangulated;
+  std::vector<Vec3> X_ref;
   // Triangulation by the midpoint-free linear method on normalized coordinates (depth in the reference).
   for (std::size_t i = 0; i < k; ++i) {
     if (!mask_e.at<unsigned char>(static_cast<int>(i))) continue;
@@ -107,6 +119,8 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
     const double dv = cam_.fy * X1.y() / X1.z() + cam_.cy - cur_[i].y;
     if (du * du + dv * dv > cfg_.max_reproj_px * cfg_.max_reproj_px) continue;
     res.points.push_back({ref_[i].x, ref_[i].y, 1.0 / zs[0]});
+    triangulated.push_back(ids_[i]);
+    X_ref.push_back(x0 * zs[0]);
     // Angle between the ray from the reference and the ray from the current camera, at the point.
     const Vec3 X0 = x0 * zs[0], c1 = -(Re.transpose() * te);
     angles.push_back(std::acos(std::clamp(X0.normalized().dot((X0 - c1).normalized()), -1.0, 1.0)));
@@ -120,7 +134,41 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
     logf(LogLevel::kDebug, "bootstrap: median triangulation angle %.2f deg", res.parallax_deg);
     return std::nullopt;
   }
+  res.T_c_ref_before = posesBefore(triangulated, X_ref);
   return res;
+}
+
+std::vector<std::optional<SE3>> GeometricInit::posesBefore(const std::vector<int>& triangulated,
+                                                           const std::vector<Vec3>& X_ref) const {
+  const cv::Matx33d K(cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1);
+  std::vector<std::optional<SE3>> poses;
+  std::vector<cv::Point3f> obj;
+  std::vector<cv::Point2f> img;
+  for (std::size_t j = 0; j + 1 < seen_.size(); ++j) {
+    obj.clear(), img.clear();
+    for (std::size_t n = 0; n < triangulated.size(); ++n) {
+      const cv::Point2f q = seen_[j][triangulated[n]];
+      if (std::isnan(q.x)) continue;
+      obj.emplace_back(X_ref[n].x(), X_ref[n].y(), X_ref[n].z());
+      img.push_back(q);
+    }
+    cv::Mat rvec, tvec, R;
+    std::vector<int> inliers;
+    if (static_cast<int>(obj.size()) < cfg_.min_tracks ||
+        !cv::solvePnPRansac(obj, img, K, cv::noArray(), rvec, tvec, false, 100,
+                            static_cast<float>(cfg_.max_reproj_px), 0.99, inliers, cv::SOLVEPNP_SQPNP) ||
+        static_cast<int>(inliers.size()) < cfg_.min_tracks) {
+      poses.emplace_back();
+      continue;
+    }
+    cv::Rodrigues(rvec, R);
+    Mat3 Rm;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) Rm(r, c) = R.at<double>(r, c);
+    poses.emplace_back(
+        SE3(Quat(Rm).normalized(), Vec3(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2))));
+  }
+  return poses;
 }
 
 }  // namespace eds

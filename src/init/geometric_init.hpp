@@ -41,6 +41,9 @@ struct GeometricInitResult {
   double parallax_deg = 0;             // median triangulation angle
   SE3 T_c_ref;                         // translation of unit norm
   std::vector<ProjectedPoint> points;  // triangulated, in the reference: pixel and inverse depth
+  // The frames added before this one (in order, the reference's successors): each one's pose from the
+  // triangulated points and where its tracks were in it (PnP), in the same scale; none where that fails.
+  std::vector<std::optional<SE3>> T_c_ref_before;
 };
 
 class GeometricInit {
@@ -56,8 +59,17 @@ class GeometricInit {
  private:
   CameraModel cam_;
   GeometricInitConfig cfg_;
+  // Poses of the frames before the current one, from the triangulated points (indexed like ref_).
+  std::vector<std::optional<SE3>> posesBefore(const std::vector<int>& triangulated,
+                                              const std::vector<Vec3>& X_ref) const;
+
   cv::Mat prev_;
   std::vector<cv::Point2f> ref_, cur_;
+  // Each live track's corner index in the reference, and every frame's track positions by that index
+  // (NaN once lost): the frames in between get their poses from them once the depths are known.
+  std::size_t corners_ = 0;
+  std::vector<int> ids_;
+  std::vector<std::vector<cv::Point2f>> seen_;
 };
 
 }  // namespace eds
