@@ -61,8 +61,7 @@ FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, 
     : cam_(cam),
       cfg_(cfg),
       res_(res),
-      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock, first_keyframe_id,
-              cfg.wait_for_keyframe && cfg.early_reference && cfg.use_events),
+      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock, first_keyframe_id),
       tracker_(cam, cfg.frame_tracker) {}
 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
@@ -79,8 +78,7 @@ SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new,
 void FrameFrontend::awaitPendingKeyframe() {
   const bool wait = !has_ref_ || (pending_.active && cfg_.wait_for_keyframe);
   if (wait && cfg_.threaded_backend && worker_.busy()) ++res_.backend_waits;
-  if (wait && has_ref_) worker_.waitMapped();
-  adoptReference(wait && !has_ref_);
+  adoptReference(wait);
 }
 
 SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
@@ -204,9 +202,6 @@ bool FrameFrontend::adoptReference(bool wait) {
   a_kf_ = ref->a, b_kf_ = ref->b;
   ref_ = std::move(ref->kf);
   ref_id_ = ref->id;
-  ++reference_version_;
-  ref_preliminary_ = ref->preliminary;
-  res_.early_references += ref->preliminary;
   pending_.active = false;
   has_ref_ = !ref_.points.empty();
   ref_depth_ratio_ = depthRatio(ref_.points);

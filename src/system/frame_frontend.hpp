@@ -55,10 +55,6 @@ class FrameFrontend {
   // The current tracking reference (keyframe image, points with inverse depth) and its pose.
   const Keyframe& reference() const { return ref_; }
   int referenceId() const { return ref_id_; }
-  // Counts the references taken up (a keyframe's optimized reference follows its preliminary one
-  // under the same id).
-  int referenceVersion() const { return reference_version_; }
-  bool referencePreliminary() const { return ref_preliminary_; }
   const SE3& T_w_kf() const { return T_w_kf_; }
 
   BackendWorker& worker() { return worker_; }
@@ -90,8 +86,7 @@ class FrameFrontend {
   BackendWorker worker_;
   FrameTracker tracker_;
   Keyframe ref_;
-  int ref_id_ = -1, reference_version_ = 0;
-  bool ref_preliminary_ = false;
+  int ref_id_ = -1;
   double ref_depth_ratio_ = 1.0;  // 90th / 10th percentile of the reference's depths
   bool has_ref_ = false, last_ok_ = false;
   SE3 T_w_kf_;
