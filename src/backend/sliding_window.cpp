@@ -138,14 +138,14 @@ const BaFrame* SlidingWindow::frame(int id) const {
   return nullptr;
 }
 
-std::vector<KeyframePoint> SlidingWindow::pointsIn(int f) const {
+std::vector<KeyframePoint> SlidingWindow::pointsIn(int f, bool hosted) const {
   std::vector<KeyframePoint> out;
   if (f < 0 || f >= size()) return out;
   const SE3 T_n_w = frames_[f].T_w_c.inverse();
   const std::vector<double> rms = ba_.patternRms(frames_, points_, f);
   for (std::size_t i = 0; i < points_.size(); ++i) {
     const BaPoint& p = points_[i];
-    if (p.outlier || !(p.inv_depth > 0)) continue;
+    if (p.outlier || !(p.inv_depth > 0) || (!hosted && p.host == f)) continue;
     const Vec3 x = cam_.pinholeRay(p.u, p.v);
     const Vec3 q = T_n_w * (frames_[p.host].T_w_c * (x / p.inv_depth));
     if (q.z() <= 1e-6) continue;

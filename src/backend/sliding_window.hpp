@@ -84,10 +84,10 @@ class SlidingWindow {
   // Pose of keyframe `id` if it is in the window.
   const BaFrame* frame(int id) const;
   // Points of the window in the newest keyframe's pixel grid, with inverse depths there (for the
-  // trackers and for mapping a new keyframe).
-  std::vector<KeyframePoint> pointsInNewest() const { return pointsIn(size() - 1); }
+  // trackers and for mapping a new keyframe); `hosted` false leaves out the keyframe's own points.
+  std::vector<KeyframePoint> pointsInNewest(bool hosted = true) const { return pointsIn(size() - 1, hosted); }
   // The same in the pixel grid of frames()[f].
-  std::vector<KeyframePoint> pointsIn(int f) const;
+  std::vector<KeyframePoint> pointsIn(int f, bool hosted = true) const;
   std::vector<Vec3> worldPoints() const;
   int numPoints() const;
   int numPriorFrames() const { return static_cast<int>(prior_.frames.size()); }

@@ -15,13 +15,14 @@ namespace eds {
 
 BackendWorker::BackendWorker(const CameraModel& pinhole, const MappingConfig& mapping,
                              const BackendConfig& backend, bool threaded, StageClock* caller_clock,
-                             int first_id)
+                             int first_id, bool early_reference)
     : cam_(pinhole),
       mcfg_(mapping),
       window_(pinhole, backend),
       next_id_(first_id),
       submitted_id_(first_id),
       threaded_(threaded),
+      early_reference_(threaded && early_reference),
       caller_clock_(caller_clock) {
   mcfg_.points.validate();
   if (threaded_) thread_ = std::thread([this] { run(); });
@@ -66,6 +67,13 @@ void BackendWorker::waitIdle() {
   const ScopedStage waiting(caller_clock_, Stage::kWaiting);
   std::unique_lock<std::mutex> lock(mutex_);
   cv_.wait(lock, [this] { return !working_ && queue_.empty(); });
+}
+
+void BackendWorker::waitMapped() {
+  if (!early_reference_) return waitIdle();
+  const ScopedStage waiting(caller_clock_, Stage::kWaiting);
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait(lock, [this] { return queue_.empty() && (!working_ || mapped_); });
 }
 
 void BackendWorker::finish() {
@@ -124,6 +132,7 @@ void BackendWorker::run() {
     KeyframeJob job = std::move(queue_.front());
     queue_.pop_front();
     working_ = true;
+    mapped_ = false;
     lock.unlock();
     process(job);  // only this thread touches the window while working_
     lock.lock();
@@ -157,6 +166,14 @@ void BackendWorker::process(KeyframeJob& job) {
   }
   window_.addKeyframe(next_id_, job.t, job.T_w_kf, job.a, job.b, kf.image, pts);
   const double map_ms = msSince(t0);
+  if (early_reference_) {
+    TrackingReference pre = newestReference(next_id_, job.t, false);
+    pre.preliminary = true;
+    std::lock_guard<std::mutex> lock(mutex_);
+    published_ = std::move(pre);
+    mapped_ = true;
+    cv_.notify_all();
+  }
   stage.emplace(clock, Stage::kBundleAdjustment);
   const auto t1 = Clock::now();
   const BaStats st = window_.optimize();
@@ -167,21 +184,26 @@ void BackendWorker::process(KeyframeJob& job) {
          "kf %d t %.3f: %zu new points, window %d kf %d points, rmse %.4f -> %.4f, %d it, %d outliers",
          next_id_, toSeconds(job.t), pts.size(), window_.size(), window_.numPoints(), st.initial_rmse,
          st.final_rmse, st.iterations, st.outliers_removed);
-  TrackingReference ref;
-  ref.id = next_id_++;
-  const BaFrame& nf = window_.newest();
-  ref.kf.id = ref.id;
-  ref.kf.t = job.t;
-  ref.kf.T_w_kf = nf.T_w_c;
-  ref.kf.image = nf.image;
-  ref.kf.points = window_.pointsInNewest();
-  ref.a = nf.a, ref.b = nf.b;
+  TrackingReference ref = newestReference(next_id_++, job.t);
   std::lock_guard<std::mutex> lock(mutex_);
   timings_.mapping_ms.push_back(map_ms);
   timings_.ba_ms.push_back(ba_ms);
   timings_.window_points.push_back(window_.numPoints());
   published_ = std::move(ref);
   publishRetired();
+}
+
+TrackingReference BackendWorker::newestReference(int id, TimeNs t, bool with_new_points) const {
+  TrackingReference ref;
+  ref.id = id;
+  const BaFrame& nf = window_.newest();
+  ref.kf.id = id;
+  ref.kf.t = t;
+  ref.kf.T_w_kf = nf.T_w_c;
+  ref.kf.image = nf.image;
+  ref.kf.points = window_.pointsInNewest(with_new_points);
+  ref.a = nf.a, ref.b = nf.b;
+  return ref;
 }
 
 // Inverse depths of a new keyframe's pixels by epipolar search in the newest and the oldest keyframe of

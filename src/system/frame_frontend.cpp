@@ -61,7 +61,8 @@ FrameFrontend::FrameFrontend(const CameraModel& cam, const OdometryConfig& cfg, 
     : cam_(cam),
       cfg_(cfg),
       res_(res),
-      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock, first_keyframe_id),
+      worker_(cam, cfg.mapping, cfg.backend, cfg.threaded_backend, clock, first_keyframe_id,
+              cfg.wait_for_keyframe && cfg.early_reference && cfg.use_events),
       tracker_(cam, cfg.frame_tracker) {}
 
 SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new, double a, double b,
@@ -75,10 +76,13 @@ SE3 FrameFrontend::addKeyframe(TimeNs t, const cv::Mat& img, const SE3& T_w_new,
   return T_w_kf_;
 }
 
-void FrameFrontend::awaitPendingKeyframe() {
-  const bool wait = !has_ref_ || (pending_.active && cfg_.wait_for_keyframe);
+void FrameFrontend::awaitPendingKeyframe(bool adjusted) {
+  // Adjusted: also the keyframe whose preliminary reference an event frame took up meanwhile.
+  const bool pending = pending_.active || (adjusted && ref_preliminary_);
+  const bool wait = !has_ref_ || (pending && cfg_.wait_for_keyframe);
   if (wait && cfg_.threaded_backend && worker_.busy()) ++res_.backend_waits;
-  adoptReference(wait);
+  if (wait && has_ref_ && !adjusted) worker_.waitMapped();
+  adoptReference(wait && (adjusted || !has_ref_));
 }
 
 SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
@@ -202,6 +206,9 @@ bool FrameFrontend::adoptReference(bool wait) {
   a_kf_ = ref->a, b_kf_ = ref->b;
   ref_ = std::move(ref->kf);
   ref_id_ = ref->id;
+  ++reference_version_;
+  ref_preliminary_ = ref->preliminary;
+  res_.early_references += ref->preliminary;
   pending_.active = false;
   has_ref_ = !ref_.points.empty();
   ref_depth_ratio_ = depthRatio(ref_.points);

@@ -38,11 +38,13 @@ class FrameFrontend {
   // with normalizeRefusedFrame), aligned from `prior` (the events' pose) or else the constant-velocity
   // prediction, with brightness (α, β) from (1, 0). Its pose when the alignment succeeded on enough
   // residuals and landed within the frame_quality bounds of its start (it then becomes the last pose),
-  // else nullopt. The caller has called awaitPendingKeyframe() for the frame.
+  // else nullopt. The caller has called awaitPendingKeyframe(true) for the frame.
   std::optional<SE3> trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior);
   // What every frame does first, usable or not: takes up the reference the back-end published, and
-  // waits for it when a keyframe is pending (wait_for_keyframe) or there is none yet.
-  void awaitPendingKeyframe();
+  // waits for it when a keyframe is pending (wait_for_keyframe) or there is none yet. With
+  // early_reference a usable frame waits until the keyframe is mapped; `adjusted`: until its bundle
+  // adjustment is done, for a refused frame, after which the events alone carry the pose.
+  void awaitPendingKeyframe(bool adjusted = false);
   // The frame's pose with no starting point (features against the newest reference, then the direct
   // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when
   // neither finds the frame. `found` says how (matches and inliers), or why not.
@@ -55,6 +57,10 @@ class FrameFrontend {
   // The current tracking reference (keyframe image, points with inverse depth) and its pose.
   const Keyframe& reference() const { return ref_; }
   int referenceId() const { return ref_id_; }
+  // Counts the references taken up (a keyframe's optimized reference follows its preliminary one
+  // under the same id).
+  int referenceVersion() const { return reference_version_; }
+  bool referencePreliminary() const { return ref_preliminary_; }
   const SE3& T_w_kf() const { return T_w_kf_; }
 
   BackendWorker& worker() { return worker_; }
@@ -86,7 +92,8 @@ class FrameFrontend {
   BackendWorker worker_;
   FrameTracker tracker_;
   Keyframe ref_;
-  int ref_id_ = -1;
+  int ref_id_ = -1, reference_version_ = 0;
+  bool ref_preliminary_ = false;
   double ref_depth_ratio_ = 1.0;  // 90th / 10th percentile of the reference's depths
   bool has_ref_ = false, last_ok_ = false;
   SE3 T_w_kf_;

@@ -118,9 +118,15 @@ struct OdometryConfig {
   bool threaded_backend = true;
   // Threaded back-end: the frame after a keyframe waits until the back-end has mapped and optimized
   // it, and is tracked against it (as DSO runs recorded data by default). Off: tracking never waits
-  // (a live camera), and events and frames track against the previous keyframe meanwhile; measured
-  // less accurate (ESIM rotation 0.17 -> 0.22-0.29 deg) and ~20 % faster.
+  // (a live camera), and events and frames track against the previous keyframe meanwhile: faster and
+  // less accurate.
   bool wait_for_keyframe = true;
+  // Threaded back-end, waiting for keyframes, with events: the frame after a keyframe waits only until
+  // the back-end has mapped it and tracks against it at its submitted pose (seeded by the events'
+  // pose); the optimized keyframe is taken up at the frame after it is published. Frames alone wait
+  // for the optimized keyframe: from the constant-velocity start they lose accuracy without it. So does
+  // a frame the quality check refuses, after which the events carry the pose alone.
+  bool early_reference = true;
   // Events track the camera between frames (EDS); off: frames only.
   bool use_events = true;
   FlickerFilterConfig flicker_filter;
@@ -152,9 +158,10 @@ struct OdometryConfig {
 
 EDS_FIELDS(OdometryConfig, stream, frame_quality, deblur, bootstrap, frame_tracker, prior_levels,
            frame_always_tries_cv, frame_cv_min_distance, mapping, backend, policy, threaded_backend,
-           wait_for_keyframe, use_events, flicker_filter, event_frame, events, buffered_gate_translation,
-           buffered_gate_rotation_deg, buffered_max_mb, buffered_before_reference_s, event_smoothing_s,
-           event_anchor_max_interval_s, event_anchor_max_gap_s, recovery, frame_rate, start_s, duration_s)
+           wait_for_keyframe, early_reference, use_events, flicker_filter, event_frame, events,
+           buffered_gate_translation, buffered_gate_rotation_deg, buffered_max_mb,
+           buffered_before_reference_s, event_smoothing_s, event_anchor_max_interval_s,
+           event_anchor_max_gap_s, recovery, frame_rate, start_s, duration_s)
 
 struct OdometryFailure {
   TimeNs t = 0;
@@ -223,6 +230,7 @@ struct OdometryResult {
   bool exposure_estimated = false, exposure_recorded = false, deblurred = false;
   int exposure_pairs = 0;
   std::size_t backend_waits = 0;     // times the tracking thread waited for the threaded back-end
+  std::size_t early_references = 0;  // keyframes tracked against before their bundle adjustment
   std::size_t buffered_thinned = 0;  // times the event frames kept during the bootstrap were thinned
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization

@@ -71,9 +71,9 @@ void OdometryCore::frame(TimeNs t, const cv::Mat& raw) {
   if (std::string why = quality_.check(t, raw); !why.empty()) {
     ++res_.frames_rejected;
     if (initialized_ && !lost_) {
-      // As after any frame: the keyframe being mapped is waited for, so that the events, which carry
-      // the pose until the next usable frame, track against it mapped and not against its frame.
-      odo_->awaitPendingKeyframe();
+      // The keyframe being mapped is waited for, adjusted, so that the events, which carry the pose
+      // alone until the next usable frame, track against it optimized and not against its frame.
+      odo_->awaitPendingKeyframe(true);
       syncReference();
     }
     if (trackRefused(t, raw)) {
@@ -385,7 +385,7 @@ void OdometryCore::startSegment(TimeNs t) {
   buffered_.clear();
   buffered_min_dt_ = 0;
   initialized_ = lost_ = has_boot_event_ = has_event_pose_ = false;
-  boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_id_ = -1;
+  boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_version_ = -1;
   failed_in_row_ = inputs_without_pose_ = 0;
   res_.segments.push_back({static_cast<int>(res_.segments.size()), t, -1, res_.losses.back().cause});
   res_.failures.push_back({t, "track lost: relocalization keeps failing; a new map (segment " +
@@ -493,9 +493,15 @@ void OdometryCore::syncBootstrapEvents(TimeNs t) {
 }
 
 void OdometryCore::syncReference() {
-  if (!cfg_.use_events || odo_->referenceId() == event_ref_id_ || odo_->reference().points.empty()) return;
+  if (!cfg_.use_events || odo_->referenceVersion() == event_ref_version_ || odo_->reference().points.empty())
+    return;
+  // The events track against the keyframe's frame already (its provisional reference): a preliminary
+  // reference of it would cost another point selection and depth fill for a few event frames.
+  if (odo_->referencePreliminary() && events_->hasReference() &&
+      events_->referenceId() == odo_->referenceId())
+    return;
   events_->setReference(odo_->reference(), odo_->T_w_kf());
-  event_ref_id_ = odo_->referenceId();
+  event_ref_version_ = odo_->referenceVersion();
   // Published after its exposure ended (threaded back-end): the image deblurred meanwhile is kept.
   if (sharp_.t == odo_->reference().t) events_->sharpenReference(sharp_.t, sharp_.image);
 }

@@ -81,8 +81,8 @@ class OdometryCore {
   std::unique_ptr<FrameFrontend> odo_;
   std::unique_ptr<Bootstrap> boot_;
   std::unique_ptr<EventFrontend> events_;
-  bool initialized_ = false;  // the current segment's map exists
-  int event_ref_id_ = -1;
+  bool initialized_ = false;    // the current segment's map exists
+  int event_ref_version_ = -1;  // of the frame front-end's reference the events took last
   StampedImage sharp_;  // the last keyframe image deblurred for the event tracker (undistorted, float)
   std::vector<EventFrame> buffered_;
   TimeNs buffered_min_dt_ = 0;                // spacing of the buffered event frames once they were thinned

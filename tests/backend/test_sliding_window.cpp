@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "backend/sliding_window.hpp"
@@ -103,6 +104,22 @@ TEST(SlidingWindow, TrackingReferenceDropsPointsHiddenInTheNewestKeyframe) {
   }
   EXPECT_EQ(ref_in_sight, in_sight);
   EXPECT_LE(ref_hidden, hidden / 10);  // a chance match of 8 pixels at most now and then
+}
+
+// Without the points it hosts, the newest keyframe's reference holds the older keyframes' points alone,
+// projected into it (the back-end's preliminary reference, before its new points are adjusted).
+TEST(SlidingWindow, TrackingReferenceWithoutTheNewestKeyframesOwnPoints) {
+  const SlidingWindow w = windowAlong({0.0, 0.1}, BackendConfig{}, {50.0, 50.0});
+  const std::vector<KeyframePoint> all = w.pointsInNewest(), older = w.pointsInNewest(false);
+  ASSERT_FALSE(older.empty());
+  EXPECT_EQ(all.size(), 2 * older.size());
+  // Keyframe 0's grid seen from 10 cm to its right at 50 m: shifted left by fx * 0.1 / 50 = 0.4 px.
+  for (const KeyframePoint& p : older) {
+    EXPECT_NEAR(std::remainder(p.u + 0.4, 20.0), 0.0, 1e-4);
+    EXPECT_NEAR(std::remainder(p.v, 20.0), 0.0, 1e-4);
+    EXPECT_NEAR(p.inv_depth, 1.0 / 50.0, 1e-9);
+  }
+  EXPECT_EQ(w.pointsIn(0, false).size(), older.size());  // keyframe 1's grid seen from keyframe 0
 }
 
 TEST(SlidingWindow, RejectsBadRemovalSettings) {
