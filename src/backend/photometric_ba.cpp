@@ -17,6 +17,10 @@ namespace eds {
 
 namespace {
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
+// The same pattern as offset arrays, for the eight pixels at once.
+constexpr double kPatternU[8] = {0, -1, 1, -2, 0, 2, -1, 0};
+constexpr double kPatternV[8] = {-2, -1, -1, 0, 0, 0, 1, 2};
+using Arr8 = Eigen::Array<double, 8, 1>;
 
 constexpr double kLambdaFloor = 1e-8;
 
@@ -84,6 +88,63 @@ std::vector<BaFrame> linearizationFrames(const std::vector<BaFrame>& frames, con
 }
 }  // namespace
 
+namespace {
+// What evaluateCore computed per pattern pixel that its Jacobian needs.
+struct PatternGeometry {
+  const Arr8* RX;  // R_t_h x_h (3 arrays)
+  const Arr8* X;   // the point in the target (3 arrays)
+  const Arr8 &iz, &I_h, &dx, &dy;
+};
+
+// The Jacobian of evaluateCore's residuals. First-estimate Jacobians (lin): the geometry (projection,
+// frame poses, brightness) at the frames' linearization points; only the image gradient is taken at the
+// current projection.
+void pairJacobian(const CameraModel& cam, const std::vector<BaFrame>& frames, const PairTransforms& pairs,
+                  int host, int target, const Vec3& x_c, double inv_rho, const PatternGeometry& pg,
+                  PairJacobian& J, const LinearizationState* lin) {
+  const int pi = host * pairs.F + target;
+  const PairTransforms& G = lin ? *lin->pairs : pairs;
+  const BaFrame& Hg = lin ? (*lin->frames)[host] : frames[host];
+  const Arr8 du = Eigen::Map<const Arr8>(kPatternU), dv = Eigen::Map<const Arr8>(kPatternV);
+  Arr8 RXg[3], Xg[3], izg;
+  if (lin) {
+    const Mat3& Rg = G.R_t_h[pi];
+    const Vec3 Gx_c = Rg * x_c, G_du = Rg.col(0) / cam.fx, G_dv = Rg.col(1) / cam.fy;
+    const Vec3 tg = G.T_t_h[pi].translation();
+    for (int c = 0; c < 3; ++c) {
+      RXg[c] = Gx_c[c] + du * G_du[c] + dv * G_dv[c];
+      Xg[c] = RXg[c] * inv_rho + tg[c];
+    }
+    izg = (Xg[2] > 1e-6).select(Xg[2].inverse(), pg.iz);
+  }
+  const Arr8* RX = lin ? RXg : pg.RX;
+  const Arr8* X = lin ? Xg : pg.X;
+  const Arr8& iz = lin ? izg : pg.iz;
+  const Arr8 dIx = pg.dx * cam.fx * iz, dIy = pg.dy * cam.fy * iz;
+  const Arr8 dIz = -(pg.dx * cam.fx * X[0] + pg.dy * cam.fy * X[1]) * iz * iz;
+  // g = ∂I/∂X_t R_t_w; the point in the world X_w from the host's pose like X_t from the pair's.
+  const Mat3& Rtw = G.R_t_w[pi];
+  const Mat3& Rw = G.R_w_c[host];
+  const Vec3 Wx_c = Rw * x_c, W_du = Rw.col(0) / cam.fx, W_dv = Rw.col(1) / cam.fy;
+  Arr8 g[3], Xw[3];
+  for (int c = 0; c < 3; ++c) {
+    g[c] = dIx * Rtw(0, c) + dIy * Rtw(1, c) + dIz * Rtw(2, c);
+    Xw[c] = (Wx_c[c] + du * W_du[c] + dv * W_dv[c]) * inv_rho + G.t_w_c[host][c];
+  }
+  // X_t = T_w_t^-1 X_w: a left perturbation of the target moves X_t by -R_t_w (δv + δω x X_w),
+  // one of the host moves X_w by (δv + δω x X_w).
+  for (int c = 0; c < 3; ++c) J.A.col(c) = g[c].matrix();
+  J.A.col(3) = (Xw[1] * g[2] - Xw[2] * g[1]).matrix();
+  J.A.col(4) = (Xw[2] * g[0] - Xw[0] * g[2]).matrix();
+  J.A.col(5) = (Xw[0] * g[1] - Xw[1] * g[0]).matrix();
+  const double eg = G.e[pi];
+  J.A.col(6) = (eg * (pg.I_h - Hg.b)).matrix();
+  // X = R_t_h x_h / ρ + t_t_h.
+  J.d_rho = (-(dIx * RX[0] + dIy * RX[1] + dIz * RX[2]) * (inv_rho * inv_rho)).matrix();
+  J.e = eg;
+}
+}  // namespace
+
 bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairTransforms& pairs, int host,
                                  float u, float v, double rho, int target, Eigen::Matrix<double, 8, 1>& r,
                                  PairJacobian* J, const double* host_values,
@@ -91,57 +152,34 @@ bool PhotometricBA::evaluateCore(const std::vector<BaFrame>& frames, const PairT
   const BaFrame& H = frames[host];
   const BaFrame& T = frames[target];
   const int pi = host * pairs.F + target;
-  const SE3& T_t_h = pairs.T_t_h[pi];
   const Mat3& R_t_h = pairs.R_t_h[pi];
-  const double e = pairs.e[pi];
-  const int W = H.image.cols, Hh = H.image.rows;
+  const Vec3 t_t_h = pairs.T_t_h[pi].translation();
+  // The pattern spans ±2 px around (u, v).
+  if (u - 2.0 < 0 || v - 2.0 < 0 || u + 2.0 >= H.image.cols - 1 || v + 2.0 >= H.image.rows - 1) return false;
   // A pattern pixel's ray is the centre's plus (δu/fx, δv/fy, 0), so its point in the target (and in
   // the world, for the Jacobian) follows from the centre's through two columns of a rotation: no
-  // division and no rotation per pixel.
+  // division and no rotation per pixel. The eight pixels go through as arrays (vector instructions).
+  const Arr8 du = Eigen::Map<const Arr8>(kPatternU), dv = Eigen::Map<const Arr8>(kPatternV);
   const double inv_rho = 1.0 / rho;
   const Vec3 x_c = cam_.pinholeRay(u, v);
   const Vec3 Rx_c = R_t_h * x_c, R_du = R_t_h.col(0) / cam_.fx, R_dv = R_t_h.col(1) / cam_.fy;
-  // First-estimate Jacobians: the geometry (projection, frame poses, brightness) at the frames'
-  // linearization points; only the image gradient is taken at the current projection.
-  const PairTransforms& G = lin ? *lin->pairs : pairs;
-  const BaFrame& Hg = lin ? (*lin->frames)[host] : H;
-  const double eg = G.e[pi];
-  Vec3 Gx_c = Vec3::Zero(), G_du = Gx_c, G_dv = Gx_c, Wx_c = Gx_c, W_du = Gx_c, W_dv = Gx_c;
-  if (J) {
-    const Mat3& Rg = G.R_t_h[pi];
-    Gx_c = Rg * x_c, G_du = Rg.col(0) / cam_.fx, G_dv = Rg.col(1) / cam_.fy;
-    const Mat3& Rw = G.R_w_c[host];
-    Wx_c = Rw * x_c, W_du = Rw.col(0) / cam_.fx, W_dv = Rw.col(1) / cam_.fy;
+  Arr8 RX[3], X[3];  // R_t_h x_h per pixel, and the point in the target
+  for (int c = 0; c < 3; ++c) {
+    RX[c] = Rx_c[c] + du * R_du[c] + dv * R_dv[c];
+    X[c] = RX[c] * inv_rho + t_t_h[c];
   }
+  if (!(X[2] > 1e-6).all()) return false;
+  const Arr8 iz = X[2].inverse();
+  const Arr8 ut = cam_.fx * X[0] * iz + cam_.cx, vt = cam_.fy * X[1] * iz + cam_.cy;
+  if (!((ut >= 1) && (vt >= 1) && (ut < T.image.cols - 2) && (vt < T.image.rows - 2)).all()) return false;
+  Arr8 I_t, dx, dy, I_h;
   for (int k = 0; k < 8; ++k) {
-    const double uk = u + kPattern[k][0], vk = v + kPattern[k][1];
-    if (uk < 0 || vk < 0 || uk >= W - 1 || vk >= Hh - 1) return false;
-    const double I_h = host_values ? host_values[k] : static_cast<double>(sampleBilinear(H.image, uk, vk));
-    const Vec3 X_t = (Rx_c + kPattern[k][0] * R_du + kPattern[k][1] * R_dv) * inv_rho + T_t_h.translation();
-    if (X_t.z() <= 1e-6) return false;
-    const double iz = 1.0 / X_t.z();
-    const double ut = cam_.fx * X_t.x() * iz + cam_.cx, vt = cam_.fy * X_t.y() * iz + cam_.cy;
-    if (!(ut >= 1 && vt >= 1 && ut < T.image.cols - 2 && vt < T.image.rows - 2)) return false;
-    double dx, dy;
-    const double I_t = sampleBilinear(T.image, ut, vt, dx, dy);
-    r[k] = I_t - T.b - e * (I_h - H.b);
-    if (!J) continue;
-    const Vec3 RX_g = Gx_c + kPattern[k][0] * G_du + kPattern[k][1] * G_dv;  // R_t_h x_h (linearized)
-    const Vec3 X_g = lin ? Vec3(RX_g * inv_rho + G.T_t_h[pi].translation()) : X_t;
-    const double izg = !lin ? iz : X_g.z() > 1e-6 ? 1.0 / X_g.z() : iz;
-    const Eigen::RowVector3d dI_dX(dx * cam_.fx * izg, dy * cam_.fy * izg,
-                                   -(dx * cam_.fx * X_g.x() + dy * cam_.fy * X_g.y()) * izg * izg);
-    const Eigen::RowVector3d g = dI_dX * G.R_t_w[pi];
-    const Vec3 X_w = (Wx_c + kPattern[k][0] * W_du + kPattern[k][1] * W_dv) * inv_rho + G.t_w_c[host];
-    // X_t = T_w_t^-1 X_w: a left perturbation of the target moves X_t by -R_t_w (δv + δω x X_w),
-    // one of the host moves X_w by (δv + δω x X_w).
-    J->A.block<1, 3>(k, 0) = g;
-    J->A.block<1, 3>(k, 3) = X_w.cross(g.transpose()).transpose();
-    J->A(k, 6) = eg * (I_h - Hg.b);
-    // X_g = R_t_h x_h / ρ + t_t_h.
-    J->d_rho[k] = -dI_dX.dot(RX_g.transpose()) * (inv_rho * inv_rho);
+    I_t[k] = sampleBilinear(T.image, ut[k], vt[k], dx[k], dy[k]);
+    I_h[k] =
+        host_values ? host_values[k] : static_cast<double>(sampleBilinear(H.image, u + du[k], v + dv[k]));
   }
-  if (J) J->e = eg;
+  r = (I_t - T.b - pairs.e[pi] * (I_h - H.b)).matrix();
+  if (J) pairJacobian(cam_, frames, pairs, host, target, x_c, inv_rho, {RX, X, iz, I_h, dx, dy}, *J, lin);
   return true;
 }
 
@@ -389,10 +427,13 @@ bool PhotometricBA::dampedStep(const NormalEquations& ne, double lambda, int dim
 }
 
 // Drops the observations whose pattern does not match any more (occlusion, wrong depth); a point left
-// without observations is an outlier. Returns how many observations were dropped.
-int PhotometricBA::removeOutliers(const std::vector<BaFrame>& frames, std::vector<BaPoint>& points) const {
+// without observations is an outlier. Returns how many observations were dropped; the kept ones' RMS
+// residual and count (what cost() reports, from the same residuals) go to *rmse and *count.
+int PhotometricBA::removeOutliers(const std::vector<BaFrame>& frames, std::vector<BaPoint>& points,
+                                  const std::vector<HostPattern>& gw, double* rmse, int* count) const {
   const PairTransforms pairs(frames);
   std::array<int, kReductionChunks> removed{};
+  std::array<CostSums, kReductionChunks> kept{};
   forEachChunk(points.size(), [&](int chunk, std::size_t begin, std::size_t end) {
     Eigen::Matrix<double, 8, 1> r;
     for (std::size_t i = begin; i < end; ++i) {
@@ -400,16 +441,21 @@ int PhotometricBA::removeOutliers(const std::vector<BaFrame>& frames, std::vecto
       if (p.outlier) continue;
       std::size_t keep = 0;
       for (int t : p.targets) {
-        if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr) &&
-            std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy)
+        if (evaluateCore(frames, pairs, p.host, p.u, p.v, p.inv_depth, t, r, nullptr, gw[i].I.data()) &&
+            std::sqrt(r.squaredNorm() / 8) <= cfg_.outlier_energy) {
           p.targets[keep++] = t;
-        else
+          kept[chunk].addPattern(r, gw[i], cfg_.huber);
+        } else {
           ++removed[chunk];
+        }
       }
       p.targets.resize(keep);
       if (p.targets.empty()) p.outlier = true;
     }
   });
+  const CostSums sum = CostSums::total(kept);
+  *rmse = sum.rmse();
+  *count = sum.n;
   int n = 0;
   for (int k : removed) n += k;
   return n;
@@ -488,8 +534,7 @@ BaStats PhotometricBA::optimize(std::vector<BaFrame>& frames, std::vector<BaPoin
     if (!accepted) break;
   }
   for (std::size_t i = 0; i < np; ++i) points[i].inv_depth = rho[i];
-  stats.outliers_removed = removeOutliers(frames, points);
-  cost(frames, points, rho, gw, nullptr, &stats.final_rmse, &stats.residuals);
+  stats.outliers_removed = removeOutliers(frames, points, gw, &stats.final_rmse, &stats.residuals);
   return stats;
 }
 

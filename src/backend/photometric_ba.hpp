@@ -150,7 +150,8 @@ class PhotometricBA {
                 NormalEquations& ne) const;
   bool dampedStep(const NormalEquations& ne, double lambda, int dim, const std::vector<double>& rho,
                   StepScratch& w, Eigen::VectorXd& df, std::vector<double>& rho_new) const;
-  int removeOutliers(const std::vector<BaFrame>& frames, std::vector<BaPoint>& points) const;
+  int removeOutliers(const std::vector<BaFrame>& frames, std::vector<BaPoint>& points,
+                     const std::vector<HostPattern>& gw, double* rmse, int* count) const;
 
   CameraModel cam_;
   BaConfig cfg_;

@@ -19,25 +19,68 @@ constexpr double kLambdaInitial = 1e-3, kLambdaFloor = 1e-6;
 // DSO's residual pattern #8.
 constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2, 0}, {-1, 1}, {0, 2}};
 
-// JᵀWJ and JᵀWr of n Jacobian rows of 8 (row-major), with the Huber weights of r: the rows go through in
-// blocks that fit the first-level cache, each turned into columns for core/weighted_gram.hpp.
-void normalEquations(const double* J, const double* r, std::size_t n, double huber,
+// JᵀWJ and JᵀWr of n residuals with the Huber weights of r, from the Jacobian's columns: they go
+// through in blocks that fit the first-level cache, each weighted for core/weighted_gram.hpp.
+void normalEquations(const std::array<std::vector<double>, 8>& J, const std::vector<double>& r, double huber,
                      Eigen::Matrix<double, 8, 8>& H, Eigen::Matrix<double, 8, 1>& g) {
   constexpr std::size_t kBlock = 64;
-  alignas(32) double col[8][kBlock], wcol[8][kBlock], wr[kBlock];
+  alignas(32) double wcol[8][kBlock], wr[kBlock];
   const double* cols[8];
   const double* wcols[8];
-  for (int c = 0; c < 8; ++c) cols[c] = col[c], wcols[c] = wcol[c];
+  for (int c = 0; c < 8; ++c) wcols[c] = wcol[c];
   H.setZero(), g.setZero();
+  const std::size_t n = r.size();
   for (std::size_t b0 = 0; b0 < n; b0 += kBlock) {
     const std::size_t m = std::min(kBlock, n - b0);
-    for (std::size_t i = 0; i < m; ++i) {
-      const double* row = J + (b0 + i) * 8;
-      const double w = huberWeight(r[b0 + i], huber);
-      for (int c = 0; c < 8; ++c) col[c][i] = row[c], wcol[c][i] = w * row[c];
-      wr[i] = w * r[b0 + i];
+    double w[kBlock];
+    for (std::size_t i = 0; i < m; ++i) w[i] = huberWeight(r[b0 + i], huber), wr[i] = w[i] * r[b0 + i];
+    for (int c = 0; c < 8; ++c) {
+      cols[c] = J[c].data() + b0;
+      for (std::size_t i = 0; i < m; ++i) wcol[c][i] = w[i] * cols[c][i];
     }
     addWeightedGram<8>(cols, wcols, wr, m, H, g);
+  }
+}
+
+// The points' projection, as plain loops over unaliased arrays (__restrict parameters) that the
+// compiler vectorizes.
+void project(const Mat3& R, const Vec3& t, const CameraModel& c, const double* __restrict x,
+             const double* __restrict y, const double* __restrict z, std::size_t n, double* __restrict qx,
+             double* __restrict qy, double* __restrict qz, double* __restrict iz, double* __restrict u,
+             double* __restrict v) {
+  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+  const double r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2), tx = t.x(), ty = t.y(), tz = t.z();
+  const double fx = c.fx, fy = c.fy, cx = c.cx, cy = c.cy;
+  for (std::size_t i = 0; i < n; ++i) {
+    qx[i] = r00 * x[i] + r01 * y[i] + r02 * z[i] + tx;
+    qy[i] = r10 * x[i] + r11 * y[i] + r12 * z[i] + ty;
+    qz[i] = r20 * x[i] + r21 * y[i] + r22 * z[i] + tz;
+    iz[i] = 1.0 / qz[i];
+    u[i] = fx * qx[i] * iz[i] + cx, v[i] = fy * qy[i] * iz[i] + cy;
+  }
+}
+
+// The Jacobian columns (ξ (6), α, β) of m residuals from their points and image gradients.
+void jacobianColumns(const CameraModel& c, const double* __restrict qx, const double* __restrict qy,
+                     const double* __restrict qz, const double* __restrict iz, const double* __restrict dx,
+                     const double* __restrict dy, const double* __restrict ref, std::size_t m,
+                     std::array<std::vector<double>, 8>& J) {
+  for (auto& col : J) col.resize(m);
+  double* __restrict J0 = J[0].data();
+  double* __restrict J1 = J[1].data();
+  double* __restrict J2 = J[2].data();
+  double* __restrict J3 = J[3].data();
+  double* __restrict J4 = J[4].data();
+  double* __restrict J5 = J[5].data();
+  double* __restrict J6 = J[6].data();
+  double* __restrict J7 = J[7].data();
+  const double fx = c.fx, fy = c.fy;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double gx = dx[i] * fx * iz[i], gy = dy[i] * fy * iz[i];
+    const double gz = -(dx[i] * fx * qx[i] + dy[i] * fy * qy[i]) * iz[i] * iz[i];
+    J0[i] = gx, J1[i] = gy, J2[i] = gz;
+    J3[i] = qy[i] * gz - qz[i] * gy, J4[i] = qz[i] * gx - qx[i] * gz, J5[i] = qx[i] * gy - qy[i] * gx;
+    J6[i] = -ref[i], J7[i] = -1.0;
   }
 }
 }  // namespace
@@ -69,7 +112,7 @@ void FrameTracker::pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img) cons
 void FrameTracker::setKeyframe(const Keyframe& kf) {
   std::vector<cv::Mat> img;
   pyramid(kf.image, img);
-  points_.assign(cfg_.levels, {});
+  points_.assign(cfg_.levels, LevelPoints{});
   for (int l = 0; l < cfg_.levels; ++l) {
     const CameraModel c = levelCamera(l);
     const double s = 1.0 / (1 << l);
@@ -81,45 +124,61 @@ void FrameTracker::setKeyframe(const Keyframe& kf) {
       for (int k = 0; k < npat; ++k) {
         const double u = ul + (npat == 8 ? kPattern[k][0] : 0), v = vl + (npat == 8 ? kPattern[k][1] : 0);
         if (u < 0 || v < 0 || u >= c.width - 1 || v >= c.height - 1) continue;
-        const double z = 1.0 / p.inv_depth;
-        LevelPoint lp;
-        lp.p_kf = c.pinholeRay(u, v) * z;
-        lp.ref = sampleBilinear(img[l], u, v);
-        points_[l].push_back(lp);
+        const Vec3 p_kf = c.pinholeRay(u, v) * (1.0 / p.inv_depth);
+        LevelPoints& P = points_[l];
+        P.x.push_back(p_kf.x()), P.y.push_back(p_kf.y()), P.z.push_back(p_kf.z());
+        P.ref.push_back(sampleBilinear(img[l], u, v));
       }
     }
   }
-  if (points_[0].empty()) throw std::invalid_argument("frame tracker: keyframe has no point with depth");
+  if (points_[0].x.empty()) throw std::invalid_argument("frame tracker: keyframe has no point with depth");
 }
 
 int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta,
                            std::vector<double>& r, std::vector<Eigen::Matrix<double, 1, 8>>* J) const {
+  Evaluation e;
+  const int n = evaluate(level, img, T, alpha, beta, e, J != nullptr);
+  r = e.r;
+  if (J) {
+    J->resize(n);
+    for (int i = 0; i < n; ++i)
+      for (int c = 0; c < 8; ++c) (*J)[i][c] = e.J[c][i];
+  }
+  return n;
+}
+
+// Three passes: the projection of every point (vector instructions), the image samples of those in
+// view (gathered, compacted), then the Jacobian columns of those (vector instructions again).
+int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta,
+                           Evaluation& e, bool jacobian) const {
   const CameraModel c = levelCamera(level);
   const Mat3 R = T.rotationMatrix();
   const Vec3 t = T.translation();
-  r.clear();
-  if (J) J->clear();
-  for (const LevelPoint& lp : points_[level]) {
-    const Vec3 q = R * lp.p_kf + t;
-    if (q.z() <= 1e-6) continue;
-    const double iz = 1.0 / q.z();
-    const double u = c.fx * q.x() * iz + c.cx, v = c.fy * q.y() * iz + c.cy;
-    if (!(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
+  const LevelPoints& P = points_[level];
+  const std::size_t n = P.x.size();
+  for (auto* a : {&e.u, &e.v, &e.qx, &e.qy, &e.qz, &e.iz}) a->resize(n);
+  project(R, t, c, P.x.data(), P.y.data(), P.z.data(), n, e.qx.data(), e.qy.data(), e.qz.data(), e.iz.data(),
+          e.u.data(), e.v.data());
+  // In view: compacted in place (index m <= i), with the samples and gradients.
+  e.r.resize(n);
+  for (auto* a : {&e.dx, &e.dy, &e.ref}) a->resize(n);
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double u = e.u[i], v = e.v[i];
+    if (e.qz[i] <= 1e-6 || !(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
     double dx, dy;
     const double I = sampleBilinear(img, u, v, dx, dy);
     if (!std::isfinite(I)) continue;  // a pixel marked as holding no information (clipped)
-    r.push_back(I - (alpha * lp.ref + beta));
-    if (J) {
-      const Vec3 dI_dq(dx * c.fx * iz, dy * c.fy * iz, -(dx * c.fx * q.x() + dy * c.fy * q.y()) * iz * iz);
-      Eigen::Matrix<double, 1, 8> row;
-      row.head<3>() = dI_dq.transpose();
-      row.segment<3>(3) = q.cross(dI_dq).transpose();
-      row(6) = -lp.ref;
-      row(7) = -1.0;
-      J->push_back(row);
-    }
+    e.r[m] = I - (alpha * P.ref[i] + beta);
+    e.qx[m] = e.qx[i], e.qy[m] = e.qy[i], e.qz[m] = e.qz[i], e.iz[m] = e.iz[i];
+    e.dx[m] = dx, e.dy[m] = dy, e.ref[m] = P.ref[i];
+    ++m;
   }
-  return static_cast<int>(r.size());
+  e.r.resize(m);
+  if (!jacobian) return static_cast<int>(m);
+  jacobianColumns(c, e.qx.data(), e.qy.data(), e.qz.data(), e.iz.data(), e.dx.data(), e.dy.data(),
+                  e.ref.data(), m, e.J);
+  return static_cast<int>(m);
 }
 
 FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha, double& beta,
@@ -128,8 +187,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   std::vector<cv::Mat> img;
   pyramid(frame, img);
   FrameTrackResult res;
-  std::vector<double> r, r_new;
-  std::vector<Eigen::Matrix<double, 1, 8>> J, J_new;
+  Evaluation e, e_new;
   const int np = cfg_.affine ? 8 : 6;
   const double d = cfg_.huber;
   const auto cost = [d](const std::vector<double>& rr) {
@@ -137,17 +195,16 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
     for (double x : rr) c += huberCost(x, d);
     return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
   };
-  static_assert(sizeof(Eigen::Matrix<double, 1, 8>) == 8 * sizeof(double), "Jacobian rows must be packed");
   Eigen::Matrix<double, 8, 8> H;
   Eigen::Matrix<double, 8, 1> g;
   const int start = levels > 0 ? std::min(levels, cfg_.levels) - 1 : cfg_.levels - 1;
   for (int l = start; l >= 0; --l) {
     LmDamping lm(kLambdaInitial, kLambdaFloor);
     ++res.evaluations;
-    if (evaluate(l, img[l], T, alpha, beta, r, &J) < 6) continue;
-    double c0 = cost(r);
+    if (evaluate(l, img[l], T, alpha, beta, e, true) < 6) continue;
+    double c0 = cost(e.r);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
-      normalEquations(J.data()->data(), r.data(), r.size(), d, H, g);
+      normalEquations(e.J, e.r, d, H, g);
       bool improved = false;
       for (int tries = 0; tries < 5 && !improved; ++tries) {
         Eigen::MatrixXd Hs = H.topLeftCorner(np, np);
@@ -157,15 +214,14 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
         const SE3 T_new = SE3::exp(delta.head<6>()) * T;
         const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
         ++res.evaluations;
-        if (evaluate(l, img[l], T_new, a_new, b_new, r_new, &J_new) < 6) {
+        if (evaluate(l, img[l], T_new, a_new, b_new, e_new, true) < 6) {
           lm.rejected();
           continue;
         }
-        const double c1 = cost(r_new);
+        const double c1 = cost(e_new.r);
         if (c1 < c0) {
           T = T_new, alpha = a_new, beta = b_new;
-          r.swap(r_new);
-          J.swap(J_new);
+          std::swap(e, e_new);
           const bool converged = c0 - c1 < cfg_.convergence * c0 || delta.head<6>().norm() < 1e-7;
           c0 = c1;
           lm.accepted();
@@ -179,6 +235,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
       if (!improved) break;
     }
   }
+  const std::vector<double>& r = e.r;
   double ss = 0;
   for (double x : r) ss += std::min(x * x, d * d);
   res.residuals = static_cast<int>(r.size());

@@ -3,6 +3,7 @@
 // minimizes the Huber norm of I_f(π(T p)) − (α I_kf(u) + β) over T_f_kf and the affine brightness
 // (α, β), over DSO's 8-pixel pattern around each keyframe point, coarse-to-fine on an image pyramid,
 // from a given initial pose (the event tracker's, in EDS). Analytic Jacobians (checked by a test).
+#include <array>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -59,15 +60,26 @@ class FrameTracker {
   void pyramid(const cv::Mat& frame, std::vector<cv::Mat>& img) const;
 
  private:
-  struct LevelPoint {
-    Vec3 p_kf;      // pattern pixel's 3D point in the keyframe
-    float ref = 0;  // keyframe intensity at the pattern pixel
+  // A level's keyframe points (pattern pixels) as arrays: the projection runs over them in vector
+  // instructions.
+  struct LevelPoints {
+    std::vector<double> x, y, z;  // 3D point in the keyframe
+    std::vector<float> ref;       // keyframe intensity at the pixel
+  };
+  // One evaluation: residuals and Jacobian columns (ξ (6), α, β) of the points in view, and the
+  // per-point values the Jacobian is built from (kept between the evaluations of one alignment).
+  struct Evaluation {
+    std::vector<double> r;
+    std::array<std::vector<double>, 8> J;
+    std::vector<double> u, v, qx, qy, qz, iz, dx, dy, ref;
   };
   CameraModel levelCamera(int level) const;
+  int evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta, Evaluation& e,
+               bool jacobian) const;
 
   CameraModel cam_;
   FrameTrackerConfig cfg_;
-  std::vector<std::vector<LevelPoint>> points_;  // per level
+  std::vector<LevelPoints> points_;  // per level
 };
 
 // The camera of pyramid level `level` (each level half the size of the one below; pixel centres at
