@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/image_sampling.hpp"
+#include "core/parallel.hpp"
 #include "core/robust.hpp"
 #include "core/weighted_gram.hpp"
 
@@ -21,21 +22,19 @@ constexpr int kPattern[8][2] = {{0, -2}, {-1, -1}, {1, -1}, {-2, 0}, {0, 0}, {2,
 
 // JᵀWJ and JᵀWr of n residuals with the Huber weights of r, from the Jacobian's columns: they go
 // through in blocks that fit the first-level cache, each weighted for core/weighted_gram.hpp.
-void normalEquations(const std::array<std::vector<double>, 8>& J, const std::vector<double>& r, double huber,
+void normalEquations(const double* const* J, const double* r, std::size_t n, double huber,
                      Eigen::Matrix<double, 8, 8>& H, Eigen::Matrix<double, 8, 1>& g) {
   constexpr std::size_t kBlock = 64;
-  alignas(32) double wcol[8][kBlock], wr[kBlock];
+  alignas(32) double wcol[8][kBlock], wr[kBlock], w[kBlock];
   const double* cols[8];
   const double* wcols[8];
   for (int c = 0; c < 8; ++c) wcols[c] = wcol[c];
   H.setZero(), g.setZero();
-  const std::size_t n = r.size();
   for (std::size_t b0 = 0; b0 < n; b0 += kBlock) {
     const std::size_t m = std::min(kBlock, n - b0);
-    double w[kBlock];
     for (std::size_t i = 0; i < m; ++i) w[i] = huberWeight(r[b0 + i], huber), wr[i] = w[i] * r[b0 + i];
     for (int c = 0; c < 8; ++c) {
-      cols[c] = J[c].data() + b0;
+      cols[c] = J[c] + b0;
       for (std::size_t i = 0; i < m; ++i) wcol[c][i] = w[i] * cols[c][i];
     }
     addWeightedGram<8>(cols, wcols, wr, m, H, g);
@@ -64,16 +63,9 @@ void project(const Mat3& R, const Vec3& t, const CameraModel& c, const double* _
 void jacobianColumns(const CameraModel& c, const double* __restrict qx, const double* __restrict qy,
                      const double* __restrict qz, const double* __restrict iz, const double* __restrict dx,
                      const double* __restrict dy, const double* __restrict ref, std::size_t m,
-                     std::array<std::vector<double>, 8>& J) {
-  for (auto& col : J) col.resize(m);
-  double* __restrict J0 = J[0].data();
-  double* __restrict J1 = J[1].data();
-  double* __restrict J2 = J[2].data();
-  double* __restrict J3 = J[3].data();
-  double* __restrict J4 = J[4].data();
-  double* __restrict J5 = J[5].data();
-  double* __restrict J6 = J[6].data();
-  double* __restrict J7 = J[7].data();
+                     double* __restrict J0, double* __restrict J1, double* __restrict J2,
+                     double* __restrict J3, double* __restrict J4, double* __restrict J5,
+                     double* __restrict J6, double* __restrict J7) {
   const double fx = c.fx, fy = c.fy;
   for (std::size_t i = 0; i < m; ++i) {
     const double gx = dx[i] * fx * iz[i], gy = dy[i] * fy * iz[i];
@@ -83,6 +75,9 @@ void jacobianColumns(const CameraModel& c, const double* __restrict qx, const do
     J6[i] = -ref[i], J7[i] = -1.0;
   }
 }
+
+// Below this many points a level's evaluation costs more to hand out to threads than to do.
+constexpr std::size_t kParallelPoints = 4000;
 }  // namespace
 
 FrameTracker::FrameTracker(const CameraModel& pinhole, FrameTrackerConfig cfg) : cam_(pinhole), cfg_(cfg) {
@@ -137,18 +132,24 @@ void FrameTracker::setKeyframe(const Keyframe& kf) {
 int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta,
                            std::vector<double>& r, std::vector<Eigen::Matrix<double, 1, 8>>* J) const {
   Evaluation e;
-  const int n = evaluate(level, img, T, alpha, beta, e, J != nullptr);
-  r = e.r;
-  if (J) {
-    J->resize(n);
-    for (int i = 0; i < n; ++i)
-      for (int c = 0; c < 8; ++c) (*J)[i][c] = e.J[c][i];
+  evaluate(level, img, T, alpha, beta, e, J != nullptr);
+  r.clear();
+  if (J) J->clear();
+  for (int ch = 0; ch < kReductionChunks; ++ch) {
+    for (std::size_t i = e.first[ch]; i < e.first[ch] + e.count[ch]; ++i) {
+      r.push_back(e.r[i]);
+      if (!J) continue;
+      Eigen::Matrix<double, 1, 8> row;
+      for (int c = 0; c < 8; ++c) row[c] = e.J[c][i];
+      J->push_back(row);
+    }
   }
-  return n;
+  return static_cast<int>(r.size());
 }
 
-// Three passes: the projection of every point (vector instructions), the image samples of those in
-// view (gathered, compacted), then the Jacobian columns of those (vector instructions again).
+// In fixed chunks of the points (in parallel when there are many; the sums are the same either way),
+// three passes each: the projection of every point (vector instructions), the image samples of those
+// in view (gathered, compacted to the chunk's front), then the Jacobian columns of those.
 int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta,
                            Evaluation& e, bool jacobian) const {
   const CameraModel c = levelCamera(level);
@@ -156,29 +157,59 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double a
   const Vec3 t = T.translation();
   const LevelPoints& P = points_[level];
   const std::size_t n = P.x.size();
-  for (auto* a : {&e.u, &e.v, &e.qx, &e.qy, &e.qz, &e.iz}) a->resize(n);
-  project(R, t, c, P.x.data(), P.y.data(), P.z.data(), n, e.qx.data(), e.qy.data(), e.qz.data(), e.iz.data(),
-          e.u.data(), e.v.data());
-  // In view: compacted in place (index m <= i), with the samples and gradients.
-  e.r.resize(n);
-  for (auto* a : {&e.dx, &e.dy, &e.ref}) a->resize(n);
-  std::size_t m = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double u = e.u[i], v = e.v[i];
-    if (e.qz[i] <= 1e-6 || !(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
-    double dx, dy;
-    const double I = sampleBilinear(img, u, v, dx, dy);
-    if (!std::isfinite(I)) continue;  // a pixel marked as holding no information (clipped)
-    e.r[m] = I - (alpha * P.ref[i] + beta);
-    e.qx[m] = e.qx[i], e.qy[m] = e.qy[i], e.qz[m] = e.qz[i], e.iz[m] = e.iz[i];
-    e.dx[m] = dx, e.dy[m] = dy, e.ref[m] = P.ref[i];
-    ++m;
-  }
-  e.r.resize(m);
-  if (!jacobian) return static_cast<int>(m);
-  jacobianColumns(c, e.qx.data(), e.qy.data(), e.qz.data(), e.iz.data(), e.dx.data(), e.dy.data(),
-                  e.ref.data(), m, e.J);
-  return static_cast<int>(m);
+  for (auto* a : {&e.r, &e.u, &e.v, &e.qx, &e.qy, &e.qz, &e.iz, &e.dx, &e.dy, &e.ref}) a->resize(n);
+  if (jacobian)
+    for (auto& col : e.J) col.resize(n);
+  const double huber = cfg_.huber;
+  forEachChunk(
+      n,
+      [&](int ch, std::size_t b, std::size_t end) {
+        project(R, t, c, &P.x[b], &P.y[b], &P.z[b], end - b, &e.qx[b], &e.qy[b], &e.qz[b], &e.iz[b], &e.u[b],
+                &e.v[b]);
+        std::size_t m = b;  // in view: compacted in place (m <= i)
+        double cost = 0, ss = 0;
+        for (std::size_t i = b; i < end; ++i) {
+          const double u = e.u[i], v = e.v[i];
+          if (e.qz[i] <= 1e-6 || !(u >= 1 && v >= 1 && u < c.width - 2 && v < c.height - 2)) continue;
+          double dx, dy;
+          const double I = sampleBilinear(img, u, v, dx, dy);
+          if (!std::isfinite(I)) continue;  // a pixel marked as holding no information (clipped)
+          const double r = I - (alpha * P.ref[i] + beta);
+          e.r[m] = r;
+          cost += huberCost(r, huber), ss += std::min(r * r, huber * huber);
+          e.qx[m] = e.qx[i], e.qy[m] = e.qy[i], e.qz[m] = e.qz[i], e.iz[m] = e.iz[i];
+          e.dx[m] = dx, e.dy[m] = dy, e.ref[m] = P.ref[i];
+          ++m;
+        }
+        e.first[ch] = b, e.count[ch] = m - b, e.cost[ch] = cost, e.ss[ch] = ss;
+        if (jacobian)
+          jacobianColumns(c, &e.qx[b], &e.qy[b], &e.qz[b], &e.iz[b], &e.dx[b], &e.dy[b], &e.ref[b], m - b,
+                          &e.J[0][b], &e.J[1][b], &e.J[2][b], &e.J[3][b], &e.J[4][b], &e.J[5][b], &e.J[6][b],
+                          &e.J[7][b]);
+      },
+      n >= kParallelPoints);
+  std::size_t total = 0;
+  for (std::size_t k : e.count) total += k;
+  return static_cast<int>(total);
+}
+
+// The normal equations of an evaluation, per chunk (in parallel like the evaluation), summed in order.
+void FrameTracker::normalEquations(const Evaluation& e, Eigen::Matrix<double, 8, 8>& H,
+                                   Eigen::Matrix<double, 8, 1>& g) const {
+  std::array<Eigen::Matrix<double, 8, 8>, kReductionChunks> Hc;
+  std::array<Eigen::Matrix<double, 8, 1>, kReductionChunks> gc;
+  const auto body = [&](int ch) {
+    const std::size_t b = e.first[ch];
+    const double* J[8];
+    for (int c = 0; c < 8; ++c) J[c] = e.J[c].data() + b;
+    ::eds::normalEquations(J, e.r.data() + b, e.count[ch], cfg_.huber, Hc[ch], gc[ch]);
+  };
+  if (kParallelLoops && e.r.size() >= kParallelPoints)
+    tbb::parallel_for(0, kReductionChunks, body);
+  else
+    for (int ch = 0; ch < kReductionChunks; ++ch) body(ch);
+  H.setZero(), g.setZero();
+  for (int ch = 0; ch < kReductionChunks; ++ch) H += Hc[ch], g += gc[ch];
 }
 
 FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha, double& beta,
@@ -189,11 +220,11 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   FrameTrackResult res;
   Evaluation e, e_new;
   const int np = cfg_.affine ? 8 : 6;
-  const double d = cfg_.huber;
-  const auto cost = [d](const std::vector<double>& rr) {
+  const auto cost = [](const Evaluation& ev) {  // mean: the point count changes with the pose
     double c = 0;
-    for (double x : rr) c += huberCost(x, d);
-    return c / std::max<std::size_t>(1, rr.size());  // mean: the point count changes with the pose
+    std::size_t n = 0;
+    for (int ch = 0; ch < kReductionChunks; ++ch) c += ev.cost[ch], n += ev.count[ch];
+    return c / std::max<std::size_t>(1, n);
   };
   Eigen::Matrix<double, 8, 8> H;
   Eigen::Matrix<double, 8, 1> g;
@@ -202,9 +233,9 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
     LmDamping lm(kLambdaInitial, kLambdaFloor);
     ++res.evaluations;
     if (evaluate(l, img[l], T, alpha, beta, e, true) < 6) continue;
-    double c0 = cost(e.r);
+    double c0 = cost(e);
     for (int it = 0; it < cfg_.max_iterations; ++it, ++res.iterations) {
-      normalEquations(e.J, e.r, d, H, g);
+      normalEquations(e, H, g);
       bool improved = false;
       for (int tries = 0; tries < 5 && !improved; ++tries) {
         Eigen::MatrixXd Hs = H.topLeftCorner(np, np);
@@ -218,7 +249,7 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
           lm.rejected();
           continue;
         }
-        const double c1 = cost(e_new.r);
+        const double c1 = cost(e_new);
         if (c1 < c0) {
           T = T_new, alpha = a_new, beta = b_new;
           std::swap(e, e_new);
@@ -235,11 +266,11 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
       if (!improved) break;
     }
   }
-  const std::vector<double>& r = e.r;
   double ss = 0;
-  for (double x : r) ss += std::min(x * x, d * d);
-  res.residuals = static_cast<int>(r.size());
-  res.rmse = r.empty() ? 1e9 : std::sqrt(ss / r.size());
+  res.residuals = 0;
+  for (int ch = 0; ch < kReductionChunks; ++ch)
+    ss += e.ss[ch], res.residuals += static_cast<int>(e.count[ch]);
+  res.rmse = res.residuals == 0 ? 1e9 : std::sqrt(ss / res.residuals);
   res.ok = res.residuals >= cfg_.min_residuals && res.rmse <= cfg_.max_rmse && T.translation().allFinite();
   return res;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/parallel.hpp"
 #include "core/reflect.hpp"
 #include "core/se3.hpp"
 #include "map/keyframe.hpp"
@@ -67,15 +68,21 @@ class FrameTracker {
     std::vector<float> ref;       // keyframe intensity at the pixel
   };
   // One evaluation: residuals and Jacobian columns (ξ (6), α, β) of the points in view, and the
-  // per-point values the Jacobian is built from (kept between the evaluations of one alignment).
+  // per-point values the Jacobian is built from (kept between the evaluations of one alignment). The
+  // points go in fixed chunks; chunk k's residuals are at [first[k], first[k] + count[k]), with the
+  // sums of their Huber costs and clipped squares.
   struct Evaluation {
     std::vector<double> r;
     std::array<std::vector<double>, 8> J;
     std::vector<double> u, v, qx, qy, qz, iz, dx, dy, ref;
+    std::array<std::size_t, kReductionChunks> first{}, count{};
+    std::array<double, kReductionChunks> cost{}, ss{};
   };
   CameraModel levelCamera(int level) const;
   int evaluate(int level, const cv::Mat& img, const SE3& T, double alpha, double beta, Evaluation& e,
                bool jacobian) const;
+  void normalEquations(const Evaluation& e, Eigen::Matrix<double, 8, 8>& H,
+                       Eigen::Matrix<double, 8, 1>& g) const;
 
   CameraModel cam_;
   FrameTrackerConfig cfg_;
