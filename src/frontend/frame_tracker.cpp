@@ -164,8 +164,10 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double a
   forEachChunk(
       n,
       [&](int ch, std::size_t b, std::size_t end) {
-        project(R, t, c, &P.x[b], &P.y[b], &P.z[b], end - b, &e.qx[b], &e.qy[b], &e.qz[b], &e.iz[b], &e.u[b],
-                &e.v[b]);
+        // Pointers by arithmetic on data(): a chunk may be empty, and then b may be the array's end.
+        const auto at = [b](auto& a) { return a.data() + b; };
+        project(R, t, c, at(P.x), at(P.y), at(P.z), end - b, at(e.qx), at(e.qy), at(e.qz), at(e.iz), at(e.u),
+                at(e.v));
         std::size_t m = b;  // in view: compacted in place (m <= i)
         double cost = 0, ss = 0;
         for (std::size_t i = b; i < end; ++i) {
@@ -183,9 +185,9 @@ int FrameTracker::evaluate(int level, const cv::Mat& img, const SE3& T, double a
         }
         e.first[ch] = b, e.count[ch] = m - b, e.cost[ch] = cost, e.ss[ch] = ss;
         if (jacobian)
-          jacobianColumns(c, &e.qx[b], &e.qy[b], &e.qz[b], &e.iz[b], &e.dx[b], &e.dy[b], &e.ref[b], m - b,
-                          &e.J[0][b], &e.J[1][b], &e.J[2][b], &e.J[3][b], &e.J[4][b], &e.J[5][b], &e.J[6][b],
-                          &e.J[7][b]);
+          jacobianColumns(c, at(e.qx), at(e.qy), at(e.qz), at(e.iz), at(e.dx), at(e.dy), at(e.ref), m - b,
+                          at(e.J[0]), at(e.J[1]), at(e.J[2]), at(e.J[3]), at(e.J[4]), at(e.J[5]), at(e.J[6]),
+                          at(e.J[7]));
       },
       n >= kParallelPoints);
   std::size_t total = 0;
