@@ -79,9 +79,9 @@ struct BaStats {
 
 struct NormalEquations;     // defined in photometric_ba.cpp
 struct CostSums;            // defined in photometric_ba.cpp
-struct PairTransforms;      // defined in photometric_ba.cpp
-struct LinearizationState;  // defined in photometric_ba.cpp
-struct PairJacobian;        // defined in photometric_ba.cpp
+struct PairTransforms;      // defined in ba_pair_geometry.hpp
+struct LinearizationState;  // defined in ba_pair_geometry.hpp
+struct PairJacobian;        // defined in ba_pair_geometry.hpp
 
 // Per point: the gradient weight c²/(c²+|∇I|²) and the host intensity of each pattern pixel (both
 // constant during a solve).
