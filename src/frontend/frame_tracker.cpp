@@ -206,10 +206,7 @@ void FrameTracker::normalEquations(const Evaluation& e, Eigen::Matrix<double, 8,
     for (int c = 0; c < 8; ++c) J[c] = e.J[c].data() + b;
     ::eds::normalEquations(J, e.r.data() + b, e.count[ch], cfg_.huber, Hc[ch], gc[ch]);
   };
-  if (kParallelLoops && e.r.size() >= kParallelPoints)
-    tbb::parallel_for(0, kReductionChunks, body);
-  else
-    for (int ch = 0; ch < kReductionChunks; ++ch) body(ch);
+  forEachChunkIndex(body, e.r.size() >= kParallelPoints);
   H.setZero(), g.setZero();
   for (int ch = 0; ch < kReductionChunks; ++ch) H += Hc[ch], g += gc[ch];
 }
