@@ -94,6 +94,7 @@ void BM_TrackEventFrame(benchmark::State& state) {
 
 // Second argument: reversal compensation on (the default) or off, to show what it costs.
 BENCHMARK(BM_TrackEventFrame)
+    ->Args({1000, 1})
     ->Args({2000, 1})
     ->Args({5000, 1})
     ->Args({2000, 0})

@@ -2,15 +2,33 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
 #include "core/image_sampling.hpp"
+#include "core/parallel.hpp"
 #include "core/robust.hpp"
 #include "core/weighted_gram.hpp"
 
 namespace eds {
+
+namespace {
+// Below this many points an evaluation costs more to hand out to threads than to do.
+constexpr std::size_t kParallelPoints = 1000;
+
+// One pose column and one velocity column of the Jacobian of the normalized residuals:
+// jd = −(d − m (mᵀD)/s²)/s and ja = (a − m̂ (m̂ᵀA)/ŝ²)/ŝ (restrict: the compiler vectorizes the loop).
+void normalizedColumns(const double* __restrict m, const double* __restrict mh, const double* __restrict d,
+                       const double* __restrict a, std::size_t n, double md, double ha, double is, double ish,
+                       double* __restrict jd, double* __restrict ja) {
+  for (std::size_t k = 0; k < n; ++k) {
+    jd[k] = (m[k] * md - d[k]) * is;
+    ja[k] = (a[k] - mh[k] * ha) * ish;
+  }
+}
+}  // namespace
 
 void EventTrackerConfig::validate() const {
   if (max_iterations < 1) throw std::invalid_argument("event tracker: max_iterations must be >= 1");
@@ -20,7 +38,11 @@ void EventTrackerConfig::validate() const {
 }
 
 EventTracker::EventTracker(const CameraModel& pinhole, EventTrackerConfig cfg)
-    : cam_(pinhole), cfg_(cfg), huber_(cfg.huber_initial), data_var_(std::pow(cfg.huber_initial / 1.345, 2)) {
+    : cam_(pinhole),
+      cfg_(cfg),
+      huber_(cfg.huber_initial),
+      data_var_(std::pow(cfg.huber_initial / 1.345, 2)),
+      sums_(kReductionChunks) {
   cfg_.validate();
   if (cam_.distortion != Distortion::kNone)
     throw std::invalid_argument("event tracker: works on the undistorted pinhole camera");
@@ -47,7 +69,6 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
   for (Eigen::Index i = 0; i < n; ++i) rho[i] = g_rho_[i].z();
   std::nth_element(rho.begin(), rho.begin() + n / 2, rho.end());
   median_inv_depth_ = rho[n / 2];
-  idx_.reserve(n);
   m_.resize(n);
   mh_.resize(n);
   D_.resize(n, 6);
@@ -57,12 +78,17 @@ void EventTracker::setKeyframe(const Keyframe& kf) {
 void EventTracker::linearizeAt(const SE3& T_ef_kf) {
   const Mat3 R = T_ef_kf.rotationMatrix();
   const Vec3 t = T_ef_kf.translation();
-  for (std::size_t i = 0; i < p_kf_.size(); ++i) {
-    // Behind or nearly in the camera's plane the warp degenerates; such a point is out of view anyway.
-    if ((R * p_kf_[i] + t).z() <= 1e-3) continue;
-    const Vec3& g = g_rho_[i];
-    a_[i] = egmRowAtView(cam_, px_kf_[i].x, px_kf_[i].y, g.x(), g.y(), g.z(), T_ef_kf);
-  }
+  forEachChunk(
+      p_kf_.size(),
+      [&](int, std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+          // Behind or nearly in the camera's plane the warp degenerates; such a point is out of view anyway.
+          if ((R * p_kf_[i] + t).z() <= 1e-3) continue;
+          const Vec3& g = g_rho_[i];
+          a_[i] = egmRowAtView(cam_, px_kf_[i].x, px_kf_[i].y, g.x(), g.y(), g.z(), R, t);
+        }
+      },
+      p_kf_.size() >= kParallelPoints);
 }
 
 int EventTracker::pointsInView(const SE3& T_ef_kf, int width, int height) const {
@@ -79,78 +105,121 @@ int EventTracker::pointsInView(const SE3& T_ef_kf, int width, int height) const 
 
 int EventTracker::evaluate(const cv::Mat& delta, const SE3& T_ef_kf, const Vec6& nu, Eigen::VectorXd& r,
                            Eigen::MatrixXd* J) const {
-  const int W = delta.cols, H = delta.rows;
+  // Outside a solve the points are those in view at this pose (none is then outside the image).
+  chooseSet(T_ef_kf, cfg_.border, delta.cols, delta.rows);
+  return evaluateSet(delta, T_ef_kf, nu, r, J, huber_, nullptr);
+}
+
+void EventTracker::chooseSet(const SE3& T_ef_kf, double lo, int width, int height) const {
   const Mat3 R = T_ef_kf.rotationMatrix();
   const Vec3 t = T_ef_kf.translation();
-  idx_.clear();
-  Eigen::Index k = 0;
-  int inside = 0;
-  const std::size_t count = use_set_ ? solve_set_.size() : p_kf_.size();
-  for (std::size_t j = 0; j < count; ++j) {
-    const std::size_t i = use_set_ ? static_cast<std::size_t>(solve_set_[j]) : j;
+  const double hi_x = width - 1 - lo, hi_y = height - 1 - lo;
+  solve_set_.clear();
+  for (std::size_t i = 0; i < p_kf_.size(); ++i) {
     const Vec3 q = R * p_kf_[i] + t;
+    if (q.z() <= 1e-6) continue;
+    const double ux = cam_.fx * q.x() / q.z() + cam_.cx, uy = cam_.fy * q.y() / q.z() + cam_.cy;
+    if (ux >= lo && uy >= lo && ux <= hi_x && uy <= hi_y) solve_set_.push_back(static_cast<int>(i));
+  }
+  // The set's EGM rows, contiguous by column for the Jacobian; they stay fixed for the whole solve.
+  const auto n = static_cast<Eigen::Index>(solve_set_.size());
+  for (Eigen::Index k = 0; k < n; ++k) A_.row(k) = a_[static_cast<std::size_t>(solve_set_[k])];
+}
+
+void EventTracker::measureChunk(int ch, std::size_t b, std::size_t e, const cv::Mat& delta, const Mat3& R,
+                                const Vec3& t, const Vec6& nu, bool jacobian) const {
+  const int W = delta.cols, H = delta.rows;
+  double* __restrict m = m_.data();
+  double* __restrict mh = mh_.data();
+  // The prediction m̂ = A ν, a column at a time (contiguous: vectorized).
+  std::fill(mh + b, mh + e, 0.0);
+  for (int c = 0; c < 6; ++c) {
+    const double* a = A_.col(c).data();
+    for (std::size_t k = b; k < e; ++k) mh[k] += a[k] * nu[c];
+  }
+  int inside = 0;
+  for (std::size_t k = b; k < e; ++k) {
+    const Vec3 q = R * p_kf_[static_cast<std::size_t>(solve_set_[k])] + t;
     const double iz = q.z() > 1e-6 ? 1.0 / q.z() : 0.0;
     const double ux = cam_.fx * q.x() * iz + cam_.cx, uy = cam_.fy * q.y() * iz + cam_.cy;
     if (!(iz > 0 && ux >= cfg_.border && uy >= cfg_.border && ux <= W - 1 - cfg_.border &&
           uy <= H - 1 - cfg_.border)) {
-      if (!use_set_) continue;
-      // A point of this solve's set that left the image measures nothing (m = 0) but keeps its
-      // prediction: leaving the image must not be a way to shed residuals. Without this, on a
-      // weakly textured view the solver slid the pose along a valley pushing ill-fitting points out
-      // (a desk at 5 Hz drifted 20 cm and 15 degrees in 100 ms, the correlation barely changing).
-      m_[k] = 0;
-      if (J) D_.row(k).setZero(), A_.row(k) = a_[i];
-      mh_[k] = a_[i].dot(nu);
-      idx_.push_back(static_cast<int>(i));
-      ++k;
+      // A point of the set that left the image measures nothing (m = 0) but keeps its prediction:
+      // leaving the image must not be a way to shed residuals. Without this, on a weakly textured view
+      // the solver slid the pose along a valley pushing ill-fitting points out (a desk at 5 Hz drifted
+      // 20 cm and 15 degrees in 100 ms, the correlation barely changing).
+      m[k] = 0;
+      if (jacobian) D_.row(static_cast<Eigen::Index>(k)).setZero();
       continue;
     }
     ++inside;
     double gx, gy;
-    m_[k] = sampleBicubic(delta, ux, uy, &gx, &gy);
-    if (J) {
+    m[k] = sampleBicubic(delta, ux, uy, &gx, &gy);
+    if (jacobian) {
       // d(u)/d(q) then d(q)/d(ξ) = [I, -[q]x] for the left perturbation exp(ξ) T.
       const double dux_dqx = cam_.fx * iz, dux_dqz = -cam_.fx * q.x() * iz * iz;
       const double duy_dqy = cam_.fy * iz, duy_dqz = -cam_.fy * q.y() * iz * iz;
       const Vec3 dm_dq(gx * dux_dqx, gy * duy_dqy, gx * dux_dqz + gy * duy_dqz);
-      D_.row(k).head<3>() = dm_dq.transpose();
-      D_.row(k).tail<3>() = q.cross(dm_dq).transpose();  // -dm_dq^T [q]x = (q x dm_dq)^T
-      A_.row(k) = a_[i];
+      D_.row(static_cast<Eigen::Index>(k)).head<3>() = dm_dq.transpose();
+      D_.row(static_cast<Eigen::Index>(k)).tail<3>() = q.cross(dm_dq).transpose();  // -dm_dqᵀ[q]x
     }
-    mh_[k] = a_[i].dot(nu);
-    idx_.push_back(static_cast<int>(i));
-    ++k;
   }
-  const Eigen::Index n = k;
-  r.resize(n);
-  if (n == 0) return 0;
-  const double s = m_.head(n).norm(), sh = mh_.head(n).norm();
+  ChunkSums& sums = sums_[ch];
+  sums = ChunkSums{};
+  sums.inside = inside;
+  sums.mm = dot4(m + b, m + b, e - b);
+  sums.hh = dot4(mh + b, mh + b, e - b);
+  for (int c = 0; c < 6; ++c) {
+    sums.hA[c] = dot4(mh + b, A_.col(c).data() + b, e - b);
+    if (jacobian) sums.mD[c] = dot4(m + b, D_.col(c).data() + b, e - b);
+  }
+}
+
+int EventTracker::evaluateSet(const cv::Mat& delta, const SE3& T_ef_kf, const Vec6& nu, Eigen::VectorXd& r,
+                              Eigen::MatrixXd* J, double huber, double* cost) const {
+  const Mat3 R = T_ef_kf.rotationMatrix();
+  const Vec3 t = T_ef_kf.translation();
+  const std::size_t n = solve_set_.size();
+  const bool parallel = n >= kParallelPoints;
+  forEachChunk(
+      n, [&](int ch, std::size_t b, std::size_t e) { measureChunk(ch, b, e, delta, R, t, nu, J != nullptr); },
+      parallel);
+  ChunkSums total;  // in chunk order: the same sums whatever the threads
+  for (const ChunkSums& c : sums_) total.add(c);
+  r.resize(static_cast<Eigen::Index>(n));
+  if (J) J->resize(static_cast<Eigen::Index>(n), 12);
+  if (cost) *cost = 0;
+  const double s = std::sqrt(total.mm), sh = std::sqrt(total.hh);
   if (!(s > 0) || !(sh > 0)) {
     r.setZero();
-    if (J) J->setZero(n, 12);
-    return inside;
+    if (J) J->setZero();
+    return total.inside;
   }
-  r = mh_.head(n) / sh - m_.head(n) / s;
-  if (J) {
-    // r = n̂(ν) − n(ξ): dn/dξ = (D − n nᵀD)/s, dn̂/dν = (A − n̂ n̂ᵀA)/ŝ.
-    const Eigen::VectorXd nn = m_.head(n) / s, nh = mh_.head(n) / sh;
-    J->resize(n, 12);
-    const Row6 nD = nn.transpose() * D_.topRows(n);
-    const Row6 nA = nh.transpose() * A_.topRows(n);
-    J->leftCols<6>() = -(D_.topRows(n) - nn * nD) / s;
-    J->rightCols<6>() = (A_.topRows(n) - nh * nA) / sh;
-  }
-  return inside;
+  // r = n̂(ν) − n(ξ): dn/dξ = (D − n nᵀD)/s, dn̂/dν = (A − n̂ n̂ᵀA)/ŝ, with n = m/s and n̂ = m̂/ŝ.
+  const double is = 1.0 / s, ish = 1.0 / sh;
+  const Row6 md = total.mD * (is * is), ha = total.hA * (ish * ish);
+  forEachChunk(
+      n,
+      [&](int ch, std::size_t b, std::size_t e) {
+        const double* m = m_.data();
+        const double* mh = mh_.data();
+        double* rk = r.data();
+        double c = 0;
+        for (std::size_t k = b; k < e; ++k) rk[k] = mh[k] * ish - m[k] * is, c += huberCost(rk[k], huber);
+        sums_[ch].cost = c;
+        if (!J) return;
+        for (int col = 0; col < 6; ++col)
+          normalizedColumns(m + b, mh + b, D_.col(col).data() + b, A_.col(col).data() + b, e - b, md[col],
+                            ha[col], is, ish, J->col(col).data() + b, J->col(col + 6).data() + b);
+      },
+      parallel);
+  if (cost)
+    for (const ChunkSums& c : sums_) *cost += c.cost;
+  return total.inside;
 }
 
 namespace {
 constexpr double kLambdaFloor = 1e-7;
-
-double huberSum(const Eigen::VectorXd& r, double d) {
-  double c = 0;
-  for (Eigen::Index i = 0; i < r.size(); ++i) c += eds::huberCost(r[i], d);
-  return c;
-}
 
 // The prior's cost ½ eᵀ Σ⁻¹ e (times the data variance) and its error e at T.
 double priorCost(const PosePrior* prior, double scale, const SE3& T, Vec6* e_out = nullptr) {
@@ -171,27 +240,48 @@ double accumulatePosePrior(const PosePrior& prior, double scale, const SE3& T_ef
   return cost;
 }
 
+// The normal equations of the Huber-weighted (IRLS) residuals, per chunk of the points as in the
+// evaluation, summed in chunk order.
+void EventTracker::normalEquations(const Eigen::VectorXd& r, const Eigen::MatrixXd& J, double huber,
+                                   Eigen::Matrix<double, 12, 12>& H, Eigen::Matrix<double, 12, 1>& g) const {
+  const auto n = static_cast<std::size_t>(r.size());
+  w_.resize(r.size());
+  wr_.resize(r.size());
+  WJ_.resize(r.size(), 12);
+  std::array<Eigen::Matrix<double, 12, 12>, kReductionChunks> Hc;
+  std::array<Eigen::Matrix<double, 12, 1>, kReductionChunks> gc;
+  forEachChunk(
+      n,
+      [&](int ch, std::size_t b, std::size_t e) {
+        const double* rk = r.data();
+        double* w = w_.data();
+        double* wr = wr_.data();
+        for (std::size_t k = b; k < e; ++k) w[k] = huberWeight(rk[k], huber), wr[k] = w[k] * rk[k];
+        const double* cols[12];
+        const double* wcols[12];
+        for (int c = 0; c < 12; ++c) {
+          double* wc = WJ_.col(c).data();
+          const double* jc = J.col(c).data();
+          for (std::size_t k = b; k < e; ++k) wc[k] = w[k] * jc[k];
+          cols[c] = jc + b, wcols[c] = wc + b;
+        }
+        Hc[ch].setZero(), gc[ch].setZero();
+        addWeightedGram<12>(cols, wcols, wr_.data() + b, e - b, Hc[ch], gc[ch]);
+      },
+      n >= kParallelPoints);
+  H.setZero(), g.setZero();
+  for (int ch = 0; ch < kReductionChunks; ++ch) H += Hc[ch], g += gc[ch];
+}
+
 int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior,
                              Eigen::VectorXd& r, Eigen::MatrixXd& J, double& cost_out,
                              int& iterations) const {
   // This solve's points: those in view at its start, a margin inside the border (a solve moves them a
   // pixel or two; only a runaway takes them out).
-  const Mat3 R = T_ef_kf.rotationMatrix();
-  const Vec3 t = T_ef_kf.translation();
-  const double lo = cfg_.border + cfg_.set_margin, hi_x = img.cols - 1 - lo, hi_y = img.rows - 1 - lo;
-  solve_set_.clear();
-  for (std::size_t i = 0; i < p_kf_.size(); ++i) {
-    const Vec3 q = R * p_kf_[i] + t;
-    if (q.z() <= 1e-6) continue;
-    const double ux = cam_.fx * q.x() / q.z() + cam_.cx, uy = cam_.fy * q.y() / q.z() + cam_.cy;
-    if (ux >= lo && uy >= lo && ux <= hi_x && uy <= hi_y) solve_set_.push_back(static_cast<int>(i));
-  }
-  use_set_ = true;
-  struct Reset {  // evaluate() called from outside a solve sees every point again
-    bool& flag;
-    ~Reset() { flag = false; }
-  } reset{use_set_};
-  int n = evaluate(img, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J);
+  chooseSet(T_ef_kf, cfg_.border + cfg_.set_margin, img.cols, img.rows);
+  const double d = huber_;
+  double cost = 0;
+  int n = evaluateSet(img, T_ef_kf, nu.norm() > 0 ? nu : Vec6::Unit(0), r, &J, d, &cost);
   if (n < cfg_.min_points) return n;
   if (!(nu.norm() > 0)) {
     // ν from linear least squares A ν ≈ m at the initial pose: the best-aligned prediction.
@@ -200,27 +290,17 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
     nu = AtA.ldlt().solve(A.transpose() * m_.head(n));
     if (!(nu.norm() > 0)) nu = Vec6::Unit(0);
     nu.normalize();
-    n = evaluate(img, T_ef_kf, nu, r, &J);
+    n = evaluateSet(img, T_ef_kf, nu, r, &J, d, &cost);
   }
   LmDamping lm(cfg_.lambda_initial, kLambdaFloor);
-  const double d = huber_;
-  double cost = huberSum(r, d) + priorCost(prior, data_var_, T_ef_kf);
+  cost += priorCost(prior, data_var_, T_ef_kf);
   int done = 0;
   bool converged = false;
   for (int it = 0; it < cfg_.max_iterations && !converged; ++it) {
     ++done;
-    // Normal equations with the IRLS weights of the Huber norm (J is column-major: its columns are
-    // contiguous).
-    w_.resize(r.size());
-    for (Eigen::Index i = 0; i < r.size(); ++i) w_[i] = huberWeight(r[i], d);
-    WJ_ = J.array().colwise() * w_.array();
-    wr_ = w_.cwiseProduct(r);
-    const double* cols[12];
-    const double* wcols[12];
-    for (int c = 0; c < 12; ++c) cols[c] = J.col(c).data(), wcols[c] = WJ_.col(c).data();
-    Eigen::Matrix<double, 12, 12> H = Eigen::Matrix<double, 12, 12>::Zero();
-    Eigen::Matrix<double, 12, 1> g = Eigen::Matrix<double, 12, 1>::Zero();
-    addWeightedGram<12>(cols, wcols, wr_.data(), static_cast<std::size_t>(r.size()), H, g);
+    Eigen::Matrix<double, 12, 12> H;
+    Eigen::Matrix<double, 12, 1> g;
+    normalEquations(r, J, d, H, g);
     if (prior) accumulatePosePrior(*prior, data_var_, T_ef_kf, H, g);
     bool improved = false;
     for (int tries = 0; tries < 6 && !improved; ++tries) {
@@ -231,9 +311,10 @@ int EventTracker::solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const P
       const SE3 T_new = SE3::exp(delta.head<6>()) * T_ef_kf;
       Vec6 nu_new = nu + delta.tail<6>();
       nu_new.normalize();
-      const int n_new = evaluate(img, T_new, nu_new, r_try_, &J_try_);
+      double data_cost = 0;
+      const int n_new = evaluateSet(img, T_new, nu_new, r_try_, &J_try_, d, &data_cost);
       const double cost_new =
-          n_new >= cfg_.min_points ? huberSum(r_try_, d) + priorCost(prior, data_var_, T_new) : 1e300;
+          n_new >= cfg_.min_points ? data_cost + priorCost(prior, data_var_, T_new) : 1e300;
       if (cost_new < cost) {
         const double gain = cost - cost_new;
         T_ef_kf = T_new;

@@ -115,14 +115,37 @@ class EventTracker {
   int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior, Eigen::VectorXd& r,
                  Eigen::MatrixXd& J, double& cost, int& iterations) const;
 
+  // The solve's point set (solve_set_) for a pose: the points that land at least `lo` pixels inside the
+  // image; also copies their EGM rows to A_.
+  void chooseSet(const SE3& T_ef_kf, double lo, int width, int height) const;
+  // Residuals (one per point of the set), their Huber cost and, if J, the Jacobian; returns the number
+  // of the set's points inside the image. In fixed chunks of the set, in parallel for large sets.
+  int evaluateSet(const cv::Mat& delta, const SE3& T_ef_kf, const Vec6& nu, Eigen::VectorXd& r,
+                  Eigen::MatrixXd* J, double huber, double* cost) const;
+  // The first pass of a chunk: m, the prediction m̂ and D (if jacobian) per point, and the chunk's sums.
+  void measureChunk(int ch, std::size_t b, std::size_t e, const cv::Mat& delta, const Mat3& R, const Vec3& t,
+                    const Vec6& nu, bool jacobian) const;
+  void normalEquations(const Eigen::VectorXd& r, const Eigen::MatrixXd& J, double huber,
+                       Eigen::Matrix<double, 12, 12>& H, Eigen::Matrix<double, 12, 1>& g) const;
+
+  // A chunk's share of the sums that normalize the residuals (Σm², Σm̂², Σ m D, Σ m̂ A), its points inside
+  // the image and its Huber cost.
+  struct ChunkSums {
+    double mm = 0, hh = 0, cost = 0;
+    Row6 mD = Row6::Zero(), hA = Row6::Zero();
+    int inside = 0;
+    void add(const ChunkSums& o) {
+      mm += o.mm, hh += o.hh, cost += o.cost, mD += o.mD, hA += o.hA, inside += o.inside;
+    }
+  };
+
   double huber_;
   double median_inv_depth_ = 1;  // of the keyframe's points: a step's translation in pixels
   double data_var_;              // variance of one residual (robust, from the last solve): the prior's scale
   mutable cv::Mat blurred_;
   // Scratch (kept between frames: no allocation per frame once warm).
-  mutable std::vector<int> idx_;
-  mutable std::vector<int> solve_set_;  // points of the running solve (see evaluate)
-  mutable bool use_set_ = false;
+  mutable std::vector<int> solve_set_;   // points of the running solve (see chooseSet)
+  mutable std::vector<ChunkSums> sums_;  // one per chunk
   mutable Eigen::VectorXd m_, mh_;
   mutable Eigen::Matrix<double, Eigen::Dynamic, 6> D_, A_;
   // A solve's weights, weighted residuals and weighted Jacobian; the residuals and Jacobian of a step

@@ -6,9 +6,15 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 
+#include "core/parallel.hpp"
+
 namespace eds {
 
 namespace {
+// Below this many queries the neighbour searches cost less than handing them out to threads. Each query
+// only reads the input, so the results are the same either way.
+constexpr std::size_t kParallelQueries = 2000;
+
 // nanoflann's dataset adaptor over the projections' pixel coordinates.
 struct ProjectionCloud {
   const std::vector<ProjectedPoint>& pts;
@@ -84,21 +90,26 @@ std::vector<double> fillInverseDepth(const std::vector<cv::Point>& pixels,
   const ProjectionCloud cloud{projected};
   const Tree tree(2, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
   const std::size_t k = std::clamp<std::size_t>(cfg.neighbours, 1, 16);
-  std::array<std::size_t, 16> idx{};
-  std::array<float, 16> d2{};
-  std::array<double, 16> rho{};
   const float max2 = static_cast<float>(cfg.max_distance_px * cfg.max_distance_px);
-  for (std::size_t i = 0; i < pixels.size(); ++i) {
-    const float q[2] = {static_cast<float>(pixels[i].x), static_cast<float>(pixels[i].y)};
-    const std::size_t n = tree.knnSearch(q, k, idx.data(), d2.data());
-    std::size_t m = 0;
-    for (std::size_t j = 0; j < n; ++j)
-      if (d2[j] <= max2) rho[m++] = projected[idx[j]].inv_depth;
-    if (m == 0) continue;
-    // The median of the nearest few: robust to a stray point from an occluding surface.
-    std::nth_element(rho.begin(), rho.begin() + m / 2, rho.begin() + m);
-    out[i] = rho[m / 2];
-  }
+  forEachChunk(
+      pixels.size(),
+      [&](int, std::size_t b, std::size_t e) {
+        std::array<std::size_t, 16> idx{};
+        std::array<float, 16> d2{};
+        std::array<double, 16> rho{};
+        for (std::size_t i = b; i < e; ++i) {
+          const float q[2] = {static_cast<float>(pixels[i].x), static_cast<float>(pixels[i].y)};
+          const std::size_t n = tree.knnSearch(q, k, idx.data(), d2.data());
+          std::size_t m = 0;
+          for (std::size_t j = 0; j < n; ++j)
+            if (d2[j] <= max2) rho[m++] = projected[idx[j]].inv_depth;
+          if (m == 0) continue;
+          // The median of the nearest few: robust to a stray point from an occluding surface.
+          std::nth_element(rho.begin(), rho.begin() + m / 2, rho.begin() + m);
+          out[i] = rho[m / 2];
+        }
+      },
+      pixels.size() >= kParallelQueries);
   return out;
 }
 
@@ -113,18 +124,23 @@ void medianFilterInverseDepth(std::vector<cv::Point2f>& px, std::vector<double>&
   // The points binned in square cells as wide as the radius: each query reads the 3x3 cells around its
   // own, a few times faster than a k-d tree's radius search for the tens of neighbours a query has.
   const PointGrid grid(pts, static_cast<float>(radius_px));
-  std::vector<double> rho;
   const float r2 = static_cast<float>(radius_px * radius_px);
-  for (std::size_t j = 0; j < pts.size(); ++j) {
-    rho.clear();
-    grid.forEachNear(pts[j].u, pts[j].v, [&](std::size_t k) {
-      // The squared distance as a k-d tree over floats computes it, and the same strict bound.
-      const float du = pts[j].u - pts[k].u, dv = pts[j].v - pts[k].v;
-      if (du * du + dv * dv < r2) rho.push_back(pts[k].inv_depth);
-    });
-    std::nth_element(rho.begin(), rho.begin() + rho.size() / 2, rho.end());
-    inv_depth[which[j]] = rho[rho.size() / 2];
-  }
+  forEachChunk(
+      pts.size(),
+      [&](int, std::size_t b, std::size_t e) {
+        std::vector<double> rho;
+        for (std::size_t j = b; j < e; ++j) {
+          rho.clear();
+          grid.forEachNear(pts[j].u, pts[j].v, [&](std::size_t k) {
+            // The squared distance as a k-d tree over floats computes it, and the same strict bound.
+            const float du = pts[j].u - pts[k].u, dv = pts[j].v - pts[k].v;
+            if (du * du + dv * dv < r2) rho.push_back(pts[k].inv_depth);
+          });
+          std::nth_element(rho.begin(), rho.begin() + rho.size() / 2, rho.end());
+          inv_depth[which[j]] = rho[rho.size() / 2];
+        }
+      },
+      pts.size() >= kParallelQueries);
 }
 
 }  // namespace eds
