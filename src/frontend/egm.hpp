@@ -40,10 +40,10 @@ inline Row6 egmRow(const CameraModel& pinhole, double u, double v, double gx, do
 // tracker's constant inverse depth per pixel assumes), the flow is the camera's own, and ν is turned
 // into the camera's axes. At T_c_kf = identity it is egmRow; far from the keyframe the keyframe's own
 // flow field is no longer the camera's, and this keeps the prediction where the events are.
-// R, t: the rotation and translation of T_c_kf (a caller with many points forms R once).
 inline Row6 egmRowAtView(const CameraModel& pinhole, double u, double v, double gx, double gy,
-                         double inv_depth, const Mat3& R, const Vec3& t) {
-  const Vec3 q = R * (pinhole.pinholeRay(u, v) / inv_depth) + t;
+                         double inv_depth, const SE3& T_c_kf) {
+  const Mat3 R = T_c_kf.rotationMatrix();
+  const Vec3 q = R * (pinhole.pinholeRay(u, v) / inv_depth) + T_c_kf.translation();
   const double iz = 1.0 / q.z();
   Eigen::Matrix<double, 2, 3> du_dq;
   du_dq << pinhole.fx * iz, 0, -pinhole.fx * q.x() * iz * iz, 0, pinhole.fy * iz,
@@ -60,11 +60,6 @@ inline Row6 egmRowAtView(const CameraModel& pinhole, double u, double v, double 
   out.head<3>() = a.head<3>() * R;
   out.tail<3>() = a.tail<3>() * R;
   return out;
-}
-
-inline Row6 egmRowAtView(const CameraModel& pinhole, double u, double v, double gx, double gy,
-                         double inv_depth, const SE3& T_c_kf) {
-  return egmRowAtView(pinhole, u, v, gx, gy, inv_depth, T_c_kf.rotationMatrix(), T_c_kf.translation());
 }
 
 }  // namespace eds

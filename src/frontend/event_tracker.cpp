@@ -85,7 +85,7 @@ void EventTracker::linearizeAt(const SE3& T_ef_kf) {
           // Behind or nearly in the camera's plane the warp degenerates; such a point is out of view anyway.
           if ((R * p_kf_[i] + t).z() <= 1e-3) continue;
           const Vec3& g = g_rho_[i];
-          a_[i] = egmRowAtView(cam_, px_kf_[i].x, px_kf_[i].y, g.x(), g.y(), g.z(), R, t);
+          a_[i] = egmRowAtView(cam_, px_kf_[i].x, px_kf_[i].y, g.x(), g.y(), g.z(), T_ef_kf);
         }
       },
       p_kf_.size() >= kParallelPoints);
