@@ -186,6 +186,12 @@ class Odometry::Impl {
           processEventFrame();
       } else if (!frames_.empty()) {
         const bool events_past = !cfg_.use_events || producer_.nextPacketStartsAtOrAfter(frames_.front().t);
+        if (events_past && cfg_.use_events) {
+          // The producer publishes a packet and where the next one starts together: packets it finished
+          // since the take above (earlier than the frame) are there now, and go first.
+          producer_.take(efs_);
+          if (!efs_.empty()) continue;
+        }
         if (!(at_end || events_past)) {
           if (frames_.size() <= static_cast<std::size_t>(cfg_.stream.max_pending_frames)) return;
           // What the producer builds or has built since the take above goes first where it is earlier
