@@ -7,7 +7,7 @@
 # Scenes of seed 1 are the tuning set; the seed-7 rows are kept aside (never tuned on).
 # Usage: bench/lowfps_table.sh [OUT_DIR]  (needs build/release and ../shared/data; JOBS=2 runs in
 # parallel; EDS_RUN_ARGS adds options to every `eds run`, e.g. "--sync-backend"; SCENES="desk_p0 ..."
-# picks rows, RATES="2 1" columns; EDS=path/to/eds another build)
+# picks rows, RATES="2 1" columns, MODES=events only the event runs; EDS=path/to/eds another build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 EDS="${EDS:-$PWD/build/release/eds}"
@@ -15,6 +15,7 @@ DATA="${EDS_SHARED_DATA:-../shared/data}"
 OUT="${1:-/tmp/eds_lowfps_table}"
 JOBS="${JOBS:-2}"
 RATES="${RATES:-20 10 5 2 1}"
+MODES="${MODES:-events frames}"
 [ -x "$EDS" ] || { echo "error: build the release preset first (scripts/build)" >&2; exit 1; }
 [ -d "$DATA/trajectories" ] || { echo "error: shared data not found at $DATA" >&2; exit 1; }
 mkdir -p "$OUT"
@@ -37,7 +38,7 @@ for spec in $ALL_SCENES; do
     --duration 8 --smooth 0.04 --contrast-noise 0.03 --noise-rate 0.1 --exposure 0.01 --fps 20 \
     --seed "$seed" --out "$seq" > /dev/null
   for rate in $RATES; do
-    for mode in events frames; do echo "$name $rate $mode" >> "$jobs_file"; done
+    for mode in $MODES; do echo "$name $rate $mode" >> "$jobs_file"; done
   done
 done
 
@@ -66,7 +67,10 @@ for spec in $ALL_SCENES; do
   selected "$name" || continue
   line="| $name |"
   for rate in $RATES; do
-    for mode in events frames; do line+=" $(cat "$OUT/run_${name}_${rate}_${mode}.cell") |"; done
+    for mode in events frames; do
+      cell="$OUT/run_${name}_${rate}_${mode}.cell"
+      [[ " $MODES " == *" $mode "* ]] && line+=" $(cat "$cell") |" || line+=" - |"
+    done
   done
   echo "$line"
 done

@@ -48,13 +48,21 @@ EventTracker::EventTracker(const CameraModel& pinhole, EventTrackerConfig cfg)
     throw std::invalid_argument("event tracker: works on the undistorted pinhole camera");
 }
 
-void EventTracker::setKeyframe(const Keyframe& kf) {
+void EventTracker::setKeyframe(const Keyframe& kf, int max_points) {
+  if (max_points < 0) throw std::invalid_argument("event tracker: max_points must be >= 0 (0: all)");
   p_kf_.clear();
   a_.clear();
   px_kf_.clear();
   g_rho_.clear();
+  const auto usable = [](const KeyframePoint& p) { return p.inv_depth > 0 && std::isfinite(p.inv_depth); };
+  const auto total = static_cast<std::size_t>(std::count_if(kf.points.begin(), kf.points.end(), usable));
+  const auto keep = max_points > 0 ? std::min(total, static_cast<std::size_t>(max_points)) : total;
+  std::size_t seen = 0;
   for (const KeyframePoint& p : kf.points) {
-    if (!(p.inv_depth > 0) || !std::isfinite(p.inv_depth)) continue;
+    if (!usable(p)) continue;
+    // The i-th usable point is kept where i·keep/total crosses an integer: evenly spaced, `keep` of them.
+    const std::size_t i = seen++;
+    if ((i + 1) * keep / total == i * keep / total) continue;
     p_kf_.push_back(cam_.pinholeRay(p.u, p.v) * (1.0 / p.inv_depth));
     a_.push_back(egmRow(cam_, p.u, p.v, p.gx, p.gy, p.inv_depth));
     px_kf_.emplace_back(p.u, p.v);

@@ -76,7 +76,9 @@ class EventTracker {
   EventTracker(const CameraModel& pinhole, EventTrackerConfig cfg);
 
   // Uses the keyframe's points that have an inverse depth. Throws std::invalid_argument if none.
-  void setKeyframe(const Keyframe& kf);
+  // With max_points > 0 and more points than that, an evenly spaced subset of max_points (in the
+  // keyframe's point order) is kept.
+  void setKeyframe(const Keyframe& kf, int max_points = 0);
   std::size_t numPoints() const { return p_kf_.size(); }
 
   // Refines T_ef_kf and nu (unit 6-vector) from their initial values. If nu is zero, it is

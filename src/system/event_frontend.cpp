@@ -75,6 +75,16 @@ EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg
   cfg_.points.validate();
   cfg_.motion_prior.validate();
   cfg_.lost_track.validate();
+  if (!(cfg_.max_points_per_second >= 0))
+    throw std::invalid_argument("events.max_points_per_second must be >= 0 (0: every point)");
+}
+
+int EventFrontend::maxReferencePoints() const {
+  if (cfg_.max_points_per_second <= 0 || ef_count_ < kRateWindow) return 0;
+  const TimeNs newest = ef_times_[(ef_count_ - 1) % kRateWindow], oldest = ef_times_[ef_count_ % kRateWindow];
+  if (newest <= oldest) return 0;
+  const double rate = static_cast<double>(kRateWindow - 1) / toSeconds(newest - oldest);
+  return static_cast<int>(std::max(1.0, std::floor(cfg_.max_points_per_second / rate)));
 }
 
 void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
@@ -106,7 +116,7 @@ void EventFrontend::sharpenReference(TimeNs t, const cv::Mat& img) {
   if (kf.points.size() < 50) return;
   median_depth_ = medianDepth(kf.points);
   ref_ = std::move(kf);
-  tracker_.setKeyframe(ref_);
+  tracker_.setKeyframe(ref_, maxReferencePoints());
 }
 
 void EventFrontend::addFilledPoints(Keyframe& kf, const std::vector<KeyframePoint>& points) const {
@@ -166,7 +176,7 @@ bool EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   ref_id_ = kf.id;
   provisional_t_ = provisional ? kf.t : -1;
   ref_ = std::move(kf);
-  tracker_.setKeyframe(ref_);
+  tracker_.setKeyframe(ref_, maxReferencePoints());
   t_prev_ = -1;
   has_ref_ = true;
   recent_n_ = 0;
@@ -219,6 +229,7 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
                                         const PosePrior* motion, std::string* failure) {
   SE3 T = T_init;
   Vec6 nu = nu_;
+  ef_times_[ef_count_++ % kRateWindow] = ef.t;
   const TrackResult tr = tracker_.track(ef, T, nu, levels, motion);
   last_correlation_ = tr.correlation;
   if (logEnabled(LogLevel::kDebug)) {

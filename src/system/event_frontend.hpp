@@ -55,11 +55,16 @@ struct EventFrontendConfig {
   PointSelectionConfig points{.full_density_pixels = 1e5};
   DepthFillConfig fill{.max_distance_px = 1, .neighbours = 3};
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
+  // Points tracked per second: a reference gets at most this divided by the recent event-frame rate
+  // (evenly thinned). Where event frames come fast they overlap and measure the same motion, so the
+  // work per second stops growing with the event rate. 0: every point.
+  double max_points_per_second = 5e5;
   MotionPriorConfig motion_prior;
   LostTrackConfig lost_track;
 };
 
-EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, motion_prior, lost_track)
+EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, max_points_per_second, motion_prior,
+           lost_track)
 
 class EventFrontend {
  public:
@@ -141,6 +146,11 @@ class EventFrontend {
   static constexpr std::size_t kRecent = 5;
   std::array<double, kRecent> recent_corr_{}, recent_cost_{};
   std::size_t recent_n_ = 0;
+  // Times of the last event frames given to the tracker (ring buffer), for their rate.
+  static constexpr std::size_t kRateWindow = 16;
+  std::array<TimeNs, kRateWindow> ef_times_{};
+  std::size_t ef_count_ = 0;
+  int maxReferencePoints() const;  // 0: all
   // The last two frames' poses (world), for the motion prior.
   TimeNs t_f0_ = -1, t_f1_ = -1;
   SE3 T_w_f0_, T_w_f1_;

@@ -81,9 +81,9 @@ SimEventFrameCase makeSimEventFrameCase(const SimEventFrameCaseConfig& cfg) {
   return c;
 }
 
-SimCaseSolution trackSimCase(const SimEventFrameCase& c, const SE3& offset) {
+SimCaseSolution trackSimCase(const SimEventFrameCase& c, const SE3& offset, int max_points) {
   EventTracker tracker(c.cam, {});
-  tracker.setKeyframe(c.kf);
+  tracker.setKeyframe(c.kf, max_points);
   SimCaseSolution s;
   SE3 T = offset * c.T_ef_kf_true;
   Vec6 nu = Vec6::Zero();

@@ -45,7 +45,7 @@ struct SimCaseSolution {
 
 // Tracks the case's event frame from `offset * T_ef_kf_true` with zero velocity, then once more from
 // the solution (as consecutive event frames do, with the Huber scale adapted), with default tracker
-// settings.
-SimCaseSolution trackSimCase(const SimEventFrameCase& c, const SE3& offset);
+// settings; max_points > 0 thins the keyframe's points to that many (EventTracker::setKeyframe).
+SimCaseSolution trackSimCase(const SimEventFrameCase& c, const SE3& offset, int max_points = 0);
 
 }  // namespace eds

@@ -137,5 +137,34 @@ TEST(EventFrontend, BetweenFramesFarApartStartsFromTheNearerFrame) {
   EXPECT_LT(err.translation().norm(), 0.003);
 }
 
+// The tracker's points per second are bounded: a reference set after event frames 2 ms apart (500 a
+// second) gets max_points_per_second / 500 of its points, after event frames 20 ms apart
+// max_points_per_second / 50, and with the bound off all of them.
+TEST(EventFrontend, AReferenceAfterFastEventFramesIsThinnedToThePointBudget) {
+  const SimEventFrameCase c = makeSimEventFrameCase({});
+  const auto pointsAfter = [&](double spacing_s, double budget) {
+    EventFrontendConfig cfg;
+    cfg.max_points_per_second = budget;
+    EventFrontend front(c.cam, cfg);
+    front.setReference(c.kf, SE3());
+    const int before = front.numPoints();
+    for (int k = 0; k < 20; ++k) {
+      EventFrame ef = c.ef;
+      const TimeNs shift = fromSeconds(spacing_s * k);
+      ef.t += shift, ef.t_first += shift, ef.t_last += shift;
+      front.track(ef, nullptr);
+    }
+    EXPECT_EQ(front.numPoints(), before) << "thinned before the next reference";
+    front.setReference(c.kf, SE3());
+    return std::pair{before, front.numPoints()};
+  };
+  const auto [all, fast] = pointsAfter(0.002, 3e5);
+  ASSERT_GT(all, 1500);
+  EXPECT_EQ(fast, 600);
+  EXPECT_EQ(pointsAfter(0.020, 3e5).second, std::min(all, 6000));
+  EXPECT_EQ(pointsAfter(0.002, 0).second, all);
+  EXPECT_THROW(EventFrontend(c.cam, EventFrontendConfig{.max_points_per_second = -1}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace eds
