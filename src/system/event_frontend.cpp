@@ -62,6 +62,12 @@ void LostTrackConfig::validate() const {
     throw std::invalid_argument("events.lost_track.max_cost_ratio must be 0 (no check) or > 1");
 }
 
+void PointBudgetConfig::validate() const {
+  if (!(points_per_second >= 0) || !(max_frame_gap_s > 0))
+    throw std::invalid_argument(
+        "events.point_budget: points_per_second must be >= 0 (0: every point), max_frame_gap_s > 0");
+}
+
 void MotionPriorConfig::validate() const {
   if (!(sigma_translation > 0) || !(sigma_rotation > 0) || !(accel >= 0) || !(ang_accel >= 0) ||
       !(max_gap_s > 0))
@@ -75,16 +81,17 @@ EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg
   cfg_.points.validate();
   cfg_.motion_prior.validate();
   cfg_.lost_track.validate();
-  if (!(cfg_.max_points_per_second >= 0))
-    throw std::invalid_argument("events.max_points_per_second must be >= 0 (0: every point)");
+  cfg_.point_budget.validate();
 }
 
 int EventFrontend::maxReferencePoints() const {
-  if (cfg_.max_points_per_second <= 0 || ef_count_ < kRateWindow) return 0;
+  const PointBudgetConfig& pb = cfg_.point_budget;
+  if (pb.points_per_second <= 0 || ef_count_ < kRateWindow) return 0;
+  if (t_f0_ < 0 || t_f1_ <= t_f0_ || toSeconds(t_f1_ - t_f0_) > pb.max_frame_gap_s) return 0;
   const TimeNs newest = ef_times_[(ef_count_ - 1) % kRateWindow], oldest = ef_times_[ef_count_ % kRateWindow];
   if (newest <= oldest) return 0;
   const double rate = static_cast<double>(kRateWindow - 1) / toSeconds(newest - oldest);
-  return static_cast<int>(std::max(1.0, std::floor(cfg_.max_points_per_second / rate)));
+  return static_cast<int>(std::max(1.0, std::floor(pb.points_per_second / rate)));
 }
 
 void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {

@@ -47,6 +47,19 @@ struct LostTrackConfig {
 
 EDS_FIELDS(LostTrackConfig, min_correlation_ratio, max_cost_ratio)
 
+// The points the event tracker solves per second: while frames come at least every max_frame_gap_s, a
+// reference gets at most points_per_second divided by the recent event-frame rate (evenly thinned).
+// Fast event frames overlap and measure the same motion, and frames that close anchor their poses, so
+// the work per second stops growing with the event rate. Between frames farther apart each event frame
+// carries the pose alone, and every point is kept. points_per_second 0: every point, always.
+struct PointBudgetConfig {
+  double points_per_second = 5e5;
+  double max_frame_gap_s = 0.1;
+  void validate() const;
+};
+
+EDS_FIELDS(PointBudgetConfig, points_per_second, max_frame_gap_s)
+
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
   // Selection on the keyframe's log gradient. Beyond a DAVIS346's pixel count the tracker keeps the
@@ -55,15 +68,12 @@ struct EventFrontendConfig {
   PointSelectionConfig points{.full_density_pixels = 1e5};
   DepthFillConfig fill{.max_distance_px = 1, .neighbours = 3};
   double depth_median_px = 10.0;  // median filter of the reference's inverse depths (0: off)
-  // Points tracked per second: a reference gets at most this divided by the recent event-frame rate
-  // (evenly thinned). Where event frames come fast they overlap and measure the same motion, so the
-  // work per second stops growing with the event rate. 0: every point.
-  double max_points_per_second = 5e5;
+  PointBudgetConfig point_budget;
   MotionPriorConfig motion_prior;
   LostTrackConfig lost_track;
 };
 
-EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, max_points_per_second, motion_prior,
+EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, point_budget, motion_prior,
            lost_track)
 
 class EventFrontend {

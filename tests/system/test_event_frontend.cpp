@@ -137,20 +137,24 @@ TEST(EventFrontend, BetweenFramesFarApartStartsFromTheNearerFrame) {
   EXPECT_LT(err.translation().norm(), 0.003);
 }
 
-// The tracker's points per second are bounded: a reference set after event frames 2 ms apart (500 a
-// second) gets max_points_per_second / 500 of its points, after event frames 20 ms apart
-// max_points_per_second / 50, and with the bound off all of them.
+// The tracker's points per second are bounded while frames come at video rate: a reference set after
+// event frames 2 ms apart (500 a second) gets points_per_second / 500 of its points, after event frames
+// 20 ms apart points_per_second / 50; with the budget off, or frames 0.5 s apart, all of them.
 TEST(EventFrontend, AReferenceAfterFastEventFramesIsThinnedToThePointBudget) {
   const SimEventFrameCase c = makeSimEventFrameCase({});
-  const auto pointsAfter = [&](double spacing_s, double budget) {
+  const auto pointsAfter = [&](double spacing_s, double budget, double frame_gap_s = 0.05) {
     EventFrontendConfig cfg;
-    cfg.max_points_per_second = budget;
+    cfg.point_budget.points_per_second = budget;
     EventFrontend front(c.cam, cfg);
     front.setReference(c.kf, SE3());
+    // Two frames, then the event frames (all 1 s later than the case's own times: they must be >= 0).
+    const TimeNs t_frame = c.kf.t + fromSeconds(1.0);
+    front.correct(t_frame - fromSeconds(frame_gap_s), SE3());
+    front.correct(t_frame, SE3());
     const int before = front.numPoints();
     for (int k = 0; k < 20; ++k) {
       EventFrame ef = c.ef;
-      const TimeNs shift = fromSeconds(spacing_s * k);
+      const TimeNs shift = fromSeconds(1.0 + spacing_s * k);
       ef.t += shift, ef.t_first += shift, ef.t_last += shift;
       front.track(ef, nullptr);
     }
@@ -163,7 +167,12 @@ TEST(EventFrontend, AReferenceAfterFastEventFramesIsThinnedToThePointBudget) {
   EXPECT_EQ(fast, 600);
   EXPECT_EQ(pointsAfter(0.020, 3e5).second, std::min(all, 6000));
   EXPECT_EQ(pointsAfter(0.002, 0).second, all);
-  EXPECT_THROW(EventFrontend(c.cam, EventFrontendConfig{.max_points_per_second = -1}), std::invalid_argument);
+  EXPECT_EQ(pointsAfter(0.002, 3e5, 0.5).second, all);
+  EventFrontendConfig bad;
+  bad.point_budget.points_per_second = -1;
+  EXPECT_THROW(EventFrontend(c.cam, bad), std::invalid_argument);
+  bad.point_budget = {.points_per_second = 3e5, .max_frame_gap_s = 0};
+  EXPECT_THROW(EventFrontend(c.cam, bad), std::invalid_argument);
 }
 
 }  // namespace
