@@ -87,11 +87,17 @@ EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg
 int EventFrontend::maxReferencePoints() const {
   const PointBudgetConfig& pb = cfg_.point_budget;
   if (pb.points_per_second <= 0 || ef_count_ < kRateWindow) return 0;
-  if (t_f0_ < 0 || t_f1_ <= t_f0_ || toSeconds(t_f1_ - t_f0_) > pb.max_frame_gap_s) return 0;
+  if (t_u0_ < 0 || t_u1_ <= t_u0_ || toSeconds(t_u1_ - t_u0_) > pb.max_frame_gap_s) return 0;
   const TimeNs newest = ef_times_[(ef_count_ - 1) % kRateWindow], oldest = ef_times_[ef_count_ % kRateWindow];
   if (newest <= oldest) return 0;
   const double rate = static_cast<double>(kRateWindow - 1) / toSeconds(newest - oldest);
   return static_cast<int>(std::max(1.0, std::floor(pb.points_per_second / rate)));
+}
+
+void EventFrontend::setTrackerReference() {
+  const int max_points = maxReferencePoints();
+  tracker_.setKeyframe(ref_, max_points);
+  thinned_ = max_points > 0;
 }
 
 void EventFrontend::setReference(const Keyframe& ref, const SE3& T_w_kf) {
@@ -123,7 +129,7 @@ void EventFrontend::sharpenReference(TimeNs t, const cv::Mat& img) {
   if (kf.points.size() < 50) return;
   median_depth_ = medianDepth(kf.points);
   ref_ = std::move(kf);
-  tracker_.setKeyframe(ref_, maxReferencePoints());
+  setTrackerReference();
 }
 
 void EventFrontend::addFilledPoints(Keyframe& kf, const std::vector<KeyframePoint>& points) const {
@@ -183,7 +189,7 @@ bool EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   ref_id_ = kf.id;
   provisional_t_ = provisional ? kf.t : -1;
   ref_ = std::move(kf);
-  tracker_.setKeyframe(ref_, maxReferencePoints());
+  setTrackerReference();
   t_prev_ = -1;
   has_ref_ = true;
   recent_n_ = 0;
@@ -237,6 +243,12 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
   SE3 T = T_init;
   Vec6 nu = nu_;
   ef_times_[ef_count_++ % kRateWindow] = ef.t;
+  // A thinned reference that usable frames stopped renewing (a dark stretch, frames lost) carries the
+  // pose alone from here: all of its points again.
+  if (thinned_ && (t_u1_ < 0 || toSeconds(ef.t - t_u1_) > cfg_.point_budget.max_frame_gap_s)) {
+    tracker_.setKeyframe(ref_);
+    thinned_ = false;
+  }
   const TrackResult tr = tracker_.track(ef, T, nu, levels, motion);
   last_correlation_ = tr.correlation;
   if (logEnabled(LogLevel::kDebug)) {
@@ -290,8 +302,9 @@ std::string EventFrontend::lostTrack(const TrackResult& tr) const {
   return why;
 }
 
-void EventFrontend::correct(TimeNs t, const SE3& T_w_c) {
+void EventFrontend::correct(TimeNs t, const SE3& T_w_c, bool usable) {
   if (!has_ref_) return;
+  if (usable) t_u0_ = t_u1_, t_u1_ = t;
   T_ef_kf_ = T_w_c.inverse() * T_w_kf_;
   t_last_ = t;
   t_prev_ = -1;

@@ -113,8 +113,9 @@ class EventFrontend {
   std::optional<SE3> trackBetween(const EventFrame& ef, TimeNs t_a, const SE3& T_w_a, TimeNs t_b,
                                   const SE3& T_w_b, std::string* failure = nullptr);
   // A better pose at time t (a tracked frame): the next event frame starts from it, and the last two
-  // make the motion prior.
-  void correct(TimeNs t, const SE3& T_w_c);
+  // make the motion prior. A frame the quality check refused (`usable` false) anchors the pose but
+  // renews no reference, so the point budget does not count it.
+  void correct(TimeNs t, const SE3& T_w_c, bool usable = true);
   // Starts again from T_w_c at rest (after a lost track: from the last good pose).
   void restartFrom(const SE3& T_w_c) {
     T_ef_kf_ = T_w_c.inverse() * T_w_kf_;
@@ -160,7 +161,10 @@ class EventFrontend {
   static constexpr std::size_t kRateWindow = 16;
   std::array<TimeNs, kRateWindow> ef_times_{};
   std::size_t ef_count_ = 0;
+  TimeNs t_u0_ = -1, t_u1_ = -1;   // the last two usable frames
+  bool thinned_ = false;           // the tracker has a subset of the reference's points
   int maxReferencePoints() const;  // 0: all
+  void setTrackerReference();
   // The last two frames' poses (world), for the motion prior.
   TimeNs t_f0_ = -1, t_f1_ = -1;
   SE3 T_w_f0_, T_w_f1_;

@@ -112,7 +112,7 @@ bool OdometryCore::trackRefused(TimeNs t, const cv::Mat& raw) {
   res_.frames.push_back({t, *T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * *T_w_f});
   frame_ok_.push_back(1);
-  if (cfg_.use_events) events_->correct(t, *T_w_f);
+  if (cfg_.use_events) events_->correct(t, *T_w_f, false);
   ++res_.frames_tracked_only;
   last_good_t_ = t;
   failed_in_row_ = inputs_without_pose_ = 0;

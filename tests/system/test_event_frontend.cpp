@@ -160,7 +160,15 @@ TEST(EventFrontend, AReferenceAfterFastEventFramesIsThinnedToThePointBudget) {
     }
     EXPECT_EQ(front.numPoints(), before) << "thinned before the next reference";
     front.setReference(c.kf, SE3());
-    return std::pair{before, front.numPoints()};
+    const int thinned = front.numPoints();
+    // No usable frame for 0.15 s (the refused one at 0.1 s does not count): the points come back.
+    front.correct(t_frame + fromSeconds(0.1), SE3(), false);
+    EventFrame late = c.ef;
+    const TimeNs shift = t_frame + fromSeconds(0.15) - c.ef.t;
+    late.t += shift, late.t_first += shift, late.t_last += shift;
+    front.track(late, nullptr);
+    EXPECT_EQ(front.numPoints(), before) << "a thinned reference kept past the frames";
+    return std::pair{before, thinned};
   };
   const auto [all, fast] = pointsAfter(0.002, 3e5);
   ASSERT_GT(all, 1500);
