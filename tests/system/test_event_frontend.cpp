@@ -137,6 +137,12 @@ TEST(EventFrontend, BetweenFramesFarApartStartsFromTheNearerFrame) {
   EXPECT_LT(err.translation().norm(), 0.003);
 }
 
+// The event frame moved by dt in time.
+EventFrame shifted(EventFrame ef, TimeNs dt) {
+  ef.t += dt, ef.t_first += dt, ef.t_last += dt;
+  return ef;
+}
+
 // The tracker's points per second are bounded while frames come at video rate: a reference set after
 // event frames 2 ms apart (500 a second) gets points_per_second / 500 of its points, after event frames
 // 20 ms apart points_per_second / 50; with the budget off, or frames 0.5 s apart, all of them.
@@ -152,21 +158,13 @@ TEST(EventFrontend, AReferenceAfterFastEventFramesIsThinnedToThePointBudget) {
     front.correct(t_frame - fromSeconds(frame_gap_s), SE3());
     front.correct(t_frame, SE3());
     const int before = front.numPoints();
-    for (int k = 0; k < 20; ++k) {
-      EventFrame ef = c.ef;
-      const TimeNs shift = fromSeconds(1.0 + spacing_s * k);
-      ef.t += shift, ef.t_first += shift, ef.t_last += shift;
-      front.track(ef, nullptr);
-    }
+    for (int k = 0; k < 20; ++k) front.track(shifted(c.ef, fromSeconds(1.0 + spacing_s * k)), nullptr);
     EXPECT_EQ(front.numPoints(), before) << "thinned before the next reference";
     front.setReference(c.kf, SE3());
     const int thinned = front.numPoints();
     // No usable frame for 0.15 s (the refused one at 0.1 s does not count): the points come back.
     front.correct(t_frame + fromSeconds(0.1), SE3(), false);
-    EventFrame late = c.ef;
-    const TimeNs shift = t_frame + fromSeconds(0.15) - c.ef.t;
-    late.t += shift, late.t_first += shift, late.t_last += shift;
-    front.track(late, nullptr);
+    front.track(shifted(c.ef, t_frame + fromSeconds(0.15) - c.ef.t), nullptr);
     EXPECT_EQ(front.numPoints(), before) << "a thinned reference kept past the frames";
     return std::pair{before, thinned};
   };
