@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core/ocl.hpp>
 #include <opencv2/features2d.hpp>
 
 namespace eds {
@@ -51,6 +52,9 @@ class DepthLookup {
 Relocalization relocalize(const Keyframe& kf, const cv::Mat& frame, const CameraModel& pinhole,
                           const RelocalizerConfig& cfg) {
   Relocalization out;
+  // OpenCV's OpenCL path (a per-thread switch) would load a GPU runtime and compile kernels in the
+  // middle of a recovery, and its results may differ from the CPU's; these images are small.
+  cv::ocl::setUseOpenCL(false);
   // Corners detected in both images (matched corner to corner, so both sides are located alike); a
   // keyframe corner takes the depth of the keyframe point nearest to it.
   const cv::Ptr<cv::ORB> orb = cv::ORB::create(cfg.features);
