@@ -185,6 +185,8 @@ bool EventFrontend::adopt(Keyframe kf, const SE3& T_w_kf, bool provisional) {
   } else {
     T_ef_kf_ = SE3();
   }
+  logf(LogLevel::kDebug, "[events] reference %d at %.3f%s: %zu points", kf.id, toSeconds(kf.t),
+       provisional ? " (provisional)" : "", kf.points.size());
   T_w_kf_ = T_w_kf;
   ref_id_ = kf.id;
   provisional_t_ = provisional ? kf.t : -1;
