@@ -156,6 +156,10 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--max-latency", a->realtime_options.max_latency_s,
                   "With --realtime: an event chunk waiting longer than this (s) is dropped")
       ->capture_default_str();
+  cmd->add_option(
+         "--min-frame-rate", a->realtime_options.min_frame_rate_hz,
+         "With --realtime: frames are dropped for newer ones only down to this rate (Hz, sensor time)")
+      ->capture_default_str();
   // Options that set a parameter: registered with its name, so that they override the --config file.
   const auto param = [&](const std::string& name, auto& field, const std::string& key,
                          const std::string& help) {

@@ -15,7 +15,8 @@ void BootstrapConfig::validate() const {
   points.validate();
   if (!(min_parallax_px > 0) || !(min_parallax_px_sparse > 0) || !(sparse_frame_interval_s > 0) ||
       min_points < 1 || min_frames < 1 || min_frames_sparse < 1 || max_frames <= min_frames ||
-      !(max_rmse > 0) || depth_prior_weight < 0 || final_views < 2)
+      !(max_rmse > 0) || !(max_rmse_growth > 1) || !(min_inlier_share > 0 && min_inlier_share <= 1) ||
+      depth_prior_weight < 0 || final_views < 2)
     throw std::invalid_argument("bootstrap: bad configuration");
 }
 
@@ -48,6 +49,7 @@ bool Bootstrap::setReference(TimeNs t, const cv::Mat& image) {
   ref_ = std::move(kf);
   has_ref_ = true;
   parallax_ = 0;
+  previous_rmse_ = 0, previous_inliers_ = 0;
   frames_.push_back({t, SE3(), 0.0, 0.0});
   images_.push_back(image);
   photometric_failed_ = false;
@@ -205,7 +207,12 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
          parallax_, rmse_, inliers, pts.size(), fr[1].T_w_c.translation().x(), fr[1].T_w_c.translation().y(),
          fr[1].T_w_c.translation().z(), fr[1].a);
   const bool exposure_jump = !(std::abs(fr[1].a) <= cfg_.max_log_brightness);
-  if (diverged || exposure_jump || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points ||
+  const bool worse_fit = previous_rmse_ > 0 && rmse_ > cfg_.max_rmse_growth * previous_rmse_ &&
+                         inliers < cfg_.min_inlier_share * previous_inliers_;
+  if (worse_fit)
+    logf(LogLevel::kDebug, "bootstrap: frame %d fits worse than the one before (rmse %.4f, %d inliers)",
+         n_after, previous_rmse_, previous_inliers_);
+  if (diverged || exposure_jump || worse_fit || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points ||
       n_after > cfg_.max_frames) {
     // The geometric path may still make it from this reference (large motion between sparse frames).
     frames_.pop_back();
@@ -213,6 +220,7 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     photometric_failed_ = true;
     return keepForGeometry(t, image);
   }
+  previous_rmse_ = rmse_, previous_inliers_ = inliers;
   const bool sparse = t - frames_[frames_.size() - 2].t >= fromSeconds(cfg_.sparse_frame_interval_s);
   const double min_parallax = sparse ? cfg_.min_parallax_px_sparse : cfg_.min_parallax_px;
   const int min_frames = sparse ? cfg_.min_frames_sparse : cfg_.min_frames;

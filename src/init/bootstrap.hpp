@@ -49,6 +49,13 @@ struct BootstrapConfig {
   int max_frames = 50;        // no success by then: the newest frame becomes the reference
   double max_parallax_step_px = 25;  // parallax growing faster than this per frame: diverged, restart
   double max_rmse = 0.05;            // two-frame residual RMS (intensity) above this: restart
+  // A frame whose fit is worse than the frame's before it (same reference) on both counts, its
+  // residual RMS more than max_rmse_growth times and its inliers fewer than min_inlier_share times
+  // that frame's, is no success either: it lies far from the last (frames dropped in between) and the
+  // fit found a wrong basin. (Either alone also flags good frames: the RMS grows with the parallax,
+  // and the inliers fall where the camera moves much between sparse frames.)
+  double max_rmse_growth = 1.5;
+  double min_inlier_share = 0.6;
   // |a| of the frame's affine brightness (I ≈ e^{-a} I_ref + b) above this: the alignment explained a
   // wrong geometry with a change of exposure (a pure rotation can do that); restart
   double max_log_brightness = 1.0;
@@ -62,8 +69,8 @@ struct BootstrapConfig {
 
 EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, final_views, depth_prior_weight, min_parallax_px,
            sparse_frame_interval_s, min_parallax_px_sparse, min_points, min_frames, min_frames_sparse,
-           max_frames, max_parallax_step_px, max_rmse, max_log_brightness, max_intensity, min_intensity,
-           geometric, geometric_init, fill)
+           max_frames, max_parallax_step_px, max_rmse, max_rmse_growth, min_inlier_share, max_log_brightness,
+           max_intensity, min_intensity, geometric, geometric_init, fill)
 
 struct BootstrapFrame {
   TimeNs t = 0;
@@ -132,6 +139,8 @@ class Bootstrap {
   cv::Mat last_image_;
   int restarts_ = 0;
   double parallax_ = 0, rmse_ = 0;
+  double previous_rmse_ = 0;  // of the last frame kept for this reference (0: none yet)
+  int previous_inliers_ = 0;
 };
 
 }  // namespace eds

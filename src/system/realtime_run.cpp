@@ -30,20 +30,25 @@ struct Item {
 // The hand-over between the producer (the "camera") and the processing thread.
 class ReleaseQueue {
  public:
-  explicit ReleaseQueue(std::size_t max_events) : max_events_(max_events) {}
+  ReleaseQueue(std::size_t max_events, std::size_t max_frames)
+      : max_events_(max_events), max_frames_(max_frames) {}
 
-  // Never blocks: a camera cannot wait. Beyond the bound the oldest event chunks go.
+  // Never blocks: a camera cannot wait. Beyond the bounds the oldest event chunks or frames go.
   void push(Item item) {
     const std::lock_guard<std::mutex> lock(mutex_);
     queued_events_ += item.events.size();
+    queued_frames_ += item.frame;
     items_.push_back(std::move(item));
-    while (queued_events_ > max_events_) {
-      const auto it = std::find_if(items_.begin(), items_.end(), [](const Item& i) { return !i.frame; });
-      if (it == items_.end()) break;
+    const auto drop = [&](bool frame) {
+      const auto it =
+          std::find_if(items_.begin(), items_.end(), [&](const Item& i) { return i.frame == frame; });
       queued_events_ -= it->events.size();
       dropped_events_ += it->events.size();
+      queued_frames_ -= frame, dropped_frames_ += frame;
       items_.erase(it);
-    }
+    };
+    while (queued_events_ > max_events_) drop(false);  // the chunks hold all queued events
+    while (queued_frames_ > max_frames_) drop(true);
     ready_.notify_one();
   }
 
@@ -74,6 +79,7 @@ class ReleaseQueue {
     out = std::move(items_.front());
     items_.pop_front();
     queued_events_ -= out.events.size();
+    queued_frames_ -= out.frame;
     newer_frame = std::any_of(items_.begin(), items_.end(), [](const Item& i) { return i.frame; });
     return true;
   }
@@ -83,11 +89,17 @@ class ReleaseQueue {
     return dropped_events_;
   }
 
+  std::size_t droppedFrames() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return dropped_frames_;
+  }
+
  private:
   mutable std::mutex mutex_;
   std::condition_variable ready_;
   std::deque<Item> items_;
   std::size_t max_events_, queued_events_ = 0, dropped_events_ = 0;
+  std::size_t max_frames_, queued_frames_ = 0, dropped_frames_ = 0;
   bool closed_ = false;
   std::exception_ptr error_;
 };
@@ -188,14 +200,18 @@ void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseF
   bool newer_frame = false;
   const auto max_wait = std::chrono::duration<double>(options.max_latency_s);
   StrideControl stride(options.max_latency_s);
+  const TimeNs max_frame_gap = fromSeconds(1.0 / options.min_frame_rate_hz);
+  TimeNs last_frame_t = -1;  // of the last frame taken
   while (queue.pop(item, newer_frame)) {
     stride.update(std::chrono::duration<double>(Clock::now() - item.released).count(), odo, rt);
-    if (item.frame && newer_frame) {
+    const TimeNs t = item.frame ? seq.frames()[item.index].t : 0;
+    if (item.frame && newer_frame && last_frame_t >= 0 && t - last_frame_t < max_frame_gap) {
       ++rt.frames_skipped;
     } else if (!item.frame && Clock::now() - item.released > max_wait) {
       rt.events_skipped += item.events.size();
     } else if (item.frame) {
-      odo.addFrame(seq.frames()[item.index].t, item.image, seq.frames()[item.index].exposure);
+      odo.addFrame(t, item.image, seq.frames()[item.index].exposure);
+      last_frame_t = t;
     } else {
       odo.addEvents(item.events);
     }
@@ -208,8 +224,10 @@ void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseF
 OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
                                    const RealtimeOptions& options, const std::atomic<bool>* stop,
                                    OdometryListener* listener) {
-  if (!(options.speed > 0) || !(options.max_latency_s > 0))
-    throw std::invalid_argument("realtime: speed and max_latency_s must be > 0");
+  if (!(options.speed > 0) || !(options.max_latency_s > 0) || !(options.min_frame_rate_hz > 0) ||
+      options.max_queued_frames < 1)
+    throw std::invalid_argument(
+        "realtime: speed, max_latency_s, min_frame_rate_hz and max_queued_frames must be > 0");
   const RunPlan plan = planRun(seq, cfg);
   Odometry odo(seq.camera(), cfg, listener);
   const Clock::time_point wall0 = Clock::now();
@@ -217,7 +235,7 @@ OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cf
     return wall0 +
            std::chrono::nanoseconds(std::llround(static_cast<double>(t - plan.first_t) / options.speed));
   };
-  ReleaseQueue queue(options.max_queued_events);
+  ReleaseQueue queue(options.max_queued_events, options.max_queued_frames);
   std::atomic<bool> failed{false};  // the processing threw: the producer stops too
   const std::function<bool()> stopped = [&] { return failed.load() || (stop != nullptr && stop->load()); };
   std::thread camera(produce, std::cref(seq), std::cref(plan), cfg.use_events, std::cref(release),
@@ -239,6 +257,7 @@ OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cf
   rt.on = true;
   rt.speed = options.speed;
   rt.events_skipped += queue.droppedEvents();
+  rt.frames_skipped += queue.droppedFrames();
   r.realtime = std::move(rt);
   if (stop != nullptr && stop->load()) {
     r.interrupted = true;

@@ -5,7 +5,8 @@
 // rather than fall further behind: first it tracks only every 2nd, 4th or 8th event frame (the
 // stride rises while items wait and falls once they do not); then event chunks released more than
 // `max_latency_s` ago are dropped (the odometry sees a gap, as after a USB drop) and a frame is
-// dropped when a newer one is already waiting; the queue between the threads is bounded. The
+// dropped when a newer one is already waiting, but never so many that the frames taken come fewer
+// than `min_frame_rate_hz` per sensor second; the queue between the threads is bounded. The
 // result's `realtime` part says what was dropped and how late each event pose came.
 #include <atomic>
 #include <cstddef>
@@ -15,9 +16,16 @@
 namespace eds {
 
 struct RealtimeOptions {
-  double speed = 1.0;                         // sensor seconds per wall second
-  double max_latency_s = 0.1;                 // wall time an event chunk may wait before it is dropped
+  double speed = 1.0;          // sensor seconds per wall second
+  double max_latency_s = 0.1;  // wall time an event chunk may wait before it is dropped
+  // Behind, frames are dropped for newer ones only while the last one taken is less than 1 / this
+  // (sensor time) before: a consumer that is always behind would otherwise drop every frame, and the
+  // frame tracker's basin, not the events, must bound the motion between two frames.
+  double min_frame_rate_hz = 10.0;
   std::size_t max_queued_events = 4'000'000;  // the producer drops its oldest chunks beyond this
+  // And its oldest frames beyond this: where even min_frame_rate_hz is more than the processing
+  // does, the frames it takes fall behind by at most this many.
+  std::size_t max_queued_frames = 32;
 };
 
 OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
