@@ -200,18 +200,17 @@ void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseF
   bool newer_frame = false;
   const auto max_wait = std::chrono::duration<double>(options.max_latency_s);
   StrideControl stride(options.max_latency_s);
-  const TimeNs max_frame_gap = fromSeconds(1.0 / options.min_frame_rate_hz);
-  TimeNs last_frame_t = -1;  // of the last frame taken
+  FramePacer pacer(options.min_frame_rate_hz);
   while (queue.pop(item, newer_frame)) {
     stride.update(std::chrono::duration<double>(Clock::now() - item.released).count(), odo, rt);
-    const TimeNs t = item.frame ? seq.frames()[item.index].t : 0;
-    if (item.frame && newer_frame && last_frame_t >= 0 && t - last_frame_t < max_frame_gap) {
-      ++rt.frames_skipped;
-    } else if (!item.frame && Clock::now() - item.released > max_wait) {
+    if (item.frame) {
+      const FrameRef& f = seq.frames()[item.index];
+      if (pacer.take(f.t, newer_frame))
+        odo.addFrame(f.t, item.image, f.exposure);
+      else
+        ++rt.frames_skipped;
+    } else if (Clock::now() - item.released > max_wait) {
       rt.events_skipped += item.events.size();
-    } else if (item.frame) {
-      odo.addFrame(t, item.image, seq.frames()[item.index].exposure);
-      last_frame_t = t;
     } else {
       odo.addEvents(item.events);
     }

@@ -28,6 +28,22 @@ struct RealtimeOptions {
   std::size_t max_queued_frames = 32;
 };
 
+// Which frames a consumer that is behind takes: a frame with a newer one already waiting is dropped,
+// unless the last frame taken is 1 / min_rate_hz (sensor time) or more before it.
+class FramePacer {
+ public:
+  explicit FramePacer(double min_rate_hz) : max_gap_(fromSeconds(1.0 / min_rate_hz)) {}
+  bool take(TimeNs t, bool newer_waiting) {
+    if (newer_waiting && last_ >= 0 && t - last_ < max_gap_) return false;
+    last_ = t;
+    return true;
+  }
+
+ private:
+  TimeNs max_gap_;
+  TimeNs last_ = -1;  // the last frame taken
+};
+
 OdometryResult runOdometryRealtime(const Sequence& seq, const OdometryConfig& cfg,
                                    const RealtimeOptions& options, const std::atomic<bool>* stop = nullptr,
                                    OdometryListener* listener = nullptr);

@@ -60,9 +60,10 @@ TEST_F(CliErrors, SimulateFaultWindowsMustBeWellFormed) {
 
 TEST_F(CliErrors, RealtimeOptionsMustBePositive) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
-  expectError("run " + esim() + runOut() + " --realtime --speed 0", "speed and max_latency_s must be > 0");
-  expectError("run " + esim() + runOut() + " --realtime --max-latency -1",
-              "speed and max_latency_s must be > 0");
+  const std::string positive = "speed, max_latency_s, min_frame_rate_hz and max_queued_frames must be > 0";
+  expectError("run " + esim() + runOut() + " --realtime --speed 0", positive);
+  expectError("run " + esim() + runOut() + " --realtime --max-latency -1", positive);
+  expectError("run " + esim() + runOut() + " --realtime --min-frame-rate 0", positive);
 }
 
 TEST_F(CliErrors, ParameterValuesOutOfRange) {

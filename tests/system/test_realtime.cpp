@@ -92,6 +92,20 @@ TEST(Realtime, TwiceFasterThanTheProcessingShedsEventFrames) {
       << r.realtime.frames_skipped << " frames skipped";
 }
 
+// Frames at 25 Hz, each with a newer one waiting (a consumer behind for good): one taken every
+// 0.12 s, the first after 0.1 s; with none waiting, every one.
+TEST(Realtime, FramesBehindAreTakenAtTheMinimumRate) {
+  FramePacer behind(10.0), keeping_up(10.0);
+  std::vector<TimeNs> taken;
+  for (int k = 0; k < 50; ++k) {
+    const TimeNs t = k * 40'000'000LL;
+    if (behind.take(t, true)) taken.push_back(t);
+    EXPECT_TRUE(keeping_up.take(t, false));
+  }
+  ASSERT_EQ(taken.size(), 17u);
+  for (std::size_t i = 1; i < taken.size(); ++i) EXPECT_EQ(taken[i] - taken[i - 1], 120'000'000LL);
+}
+
 TEST(Realtime, AStopRequestEndsTheRun) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
   const Sequence seq(dir);
