@@ -92,8 +92,9 @@ TEST(Realtime, TwiceFasterThanTheProcessingShedsEventFrames) {
       << r.realtime.frames_skipped << " frames skipped";
 }
 
-// Frames at 25 Hz, each with a newer one waiting (a consumer behind for good): one taken every
-// 0.12 s, the first after 0.1 s; with none waiting, every one.
+// Frames at 25 Hz, each with a newer one waiting (a consumer behind for good): the first taken, then
+// the first frame 0.1 s or more after the last one taken, that is one every 0.12 s; with none
+// waiting, every one.
 TEST(Realtime, FramesBehindAreTakenAtTheMinimumRate) {
   FramePacer behind(10.0), keeping_up(10.0);
   std::vector<TimeNs> taken;
