@@ -3,106 +3,20 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
-#include <deque>
 #include <exception>
 #include <functional>
-#include <mutex>
 #include <stdexcept>
 #include <thread>
 
 #include "io/merged_stream.hpp"
+#include "system/release_queue.hpp"
 
 namespace eds {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-struct Item {
-  bool frame = false;
-  std::size_t index = 0;  // frames: into seq.frames()
-  cv::Mat image;
-  EventArray events;
-  Clock::time_point released;
-};
-
-// The hand-over between the producer (the "camera") and the processing thread.
-class ReleaseQueue {
- public:
-  ReleaseQueue(std::size_t max_events, std::size_t max_frames)
-      : max_events_(max_events), max_frames_(max_frames) {}
-
-  // Never blocks: a camera cannot wait. Beyond the bounds the oldest event chunks or frames go.
-  void push(Item item) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    queued_events_ += item.events.size();
-    queued_frames_ += item.frame;
-    items_.push_back(std::move(item));
-    const auto drop = [&](bool frame) {
-      const auto it =
-          std::find_if(items_.begin(), items_.end(), [&](const Item& i) { return i.frame == frame; });
-      queued_events_ -= it->events.size();
-      dropped_events_ += it->events.size();
-      queued_frames_ -= frame, dropped_frames_ += frame;
-      items_.erase(it);
-    };
-    while (queued_events_ > max_events_) drop(false);  // the chunks hold all queued events
-    while (queued_frames_ > max_frames_) drop(true);
-    ready_.notify_one();
-  }
-
-  void close() {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    closed_ = true;
-    ready_.notify_one();
-  }
-
-  // The producer failed (bad input in the recording): closes the queue; the consumer rethrows.
-  void fail(std::exception_ptr error) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    error_ = std::move(error);
-    closed_ = true;
-    ready_.notify_one();
-  }
-
-  std::exception_ptr error() const {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    return error_;
-  }
-
-  // False once closed and empty. `newer_frame`: a later frame is already waiting.
-  bool pop(Item& out, bool& newer_frame) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    ready_.wait(lock, [&] { return !items_.empty() || closed_; });
-    if (items_.empty()) return false;
-    out = std::move(items_.front());
-    items_.pop_front();
-    queued_events_ -= out.events.size();
-    queued_frames_ -= out.frame;
-    newer_frame = std::any_of(items_.begin(), items_.end(), [](const Item& i) { return i.frame; });
-    return true;
-  }
-
-  std::size_t droppedEvents() const {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    return dropped_events_;
-  }
-
-  std::size_t droppedFrames() const {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    return dropped_frames_;
-  }
-
- private:
-  mutable std::mutex mutex_;
-  std::condition_variable ready_;
-  std::deque<Item> items_;
-  std::size_t max_events_, queued_events_ = 0, dropped_events_ = 0;
-  std::size_t max_frames_, queued_frames_ = 0, dropped_frames_ = 0;
-  bool closed_ = false;
-  std::exception_ptr error_;
-};
+using Clock = ReleasedItem::Clock;
+using Item = ReleasedItem;
 
 // The camera: releases the selected frames and the events up to the plan's end at their times.
 void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,

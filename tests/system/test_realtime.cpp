@@ -17,6 +17,7 @@
 #include "system/odometry.hpp"
 #include "system/odometry_config_io.hpp"
 #include "system/realtime_run.hpp"
+#include "system/release_queue.hpp"
 #include "test_data.hpp"
 
 namespace eds {
@@ -105,6 +106,37 @@ TEST(Realtime, FramesBehindAreTakenAtTheMinimumRate) {
   }
   ASSERT_EQ(taken.size(), 17u);
   for (std::size_t i = 1; i < taken.size(); ++i) EXPECT_EQ(taken[i] - taken[i - 1], 120'000'000LL);
+}
+
+// A consumer that takes nothing while the camera pushes: beyond the bounds the oldest frames and the
+// oldest event chunks go (each kind on its own), counted; what stays comes out in order, and a frame
+// reports whether a newer one is waiting.
+TEST(Realtime, TheReleaseQueueDropsItsOldestBeyondItsBounds) {
+  ReleaseQueue queue(2500, 4);
+  for (std::size_t k = 0; k < 10; ++k) {
+    ReleasedItem frame{.frame = true, .index = k};
+    queue.push(std::move(frame));
+    ReleasedItem chunk;
+    for (int e = 0; e < 1000; ++e) chunk.events.push_back(static_cast<TimeNs>(k), 1, 2, 1);
+    queue.push(std::move(chunk));
+  }
+  queue.close();
+  EXPECT_EQ(queue.droppedFrames(), 6u);
+  EXPECT_EQ(queue.droppedEvents(), 8000u);
+  std::vector<std::size_t> frames;
+  std::vector<TimeNs> chunks;
+  std::vector<bool> newer;
+  ReleasedItem item;
+  bool newer_frame = false;
+  while (queue.pop(item, newer_frame)) {
+    if (item.frame)
+      frames.push_back(item.index), newer.push_back(newer_frame);
+    else
+      chunks.push_back(item.events.t.front());
+  }
+  EXPECT_EQ(frames, (std::vector<std::size_t>{6, 7, 8, 9}));
+  EXPECT_EQ(newer, (std::vector<bool>{true, true, true, false}));
+  EXPECT_EQ(chunks, (std::vector<TimeNs>{8, 9}));
 }
 
 TEST(Realtime, AStopRequestEndsTheRun) {
