@@ -219,8 +219,9 @@ void addRunCommand(CLI::App& app) {
   flag("!--sync-backend", c.threaded_backend, "threaded_backend",
        "Run the back-end after each keyframe in the tracking thread (deterministic results)");
   flag("!--no-keyframe-wait", c.wait_for_keyframe, "wait_for_keyframe",
-       "Threaded back-end: tracking never waits for a new keyframe to be mapped (live cameras; "
-       "less accurate)");
+       "Threaded back-end: tracking never waits for a new keyframe to be mapped, and a keyframe wanted "
+       "while the back-end is busy is left to a later frame unless the frame is far from its reference "
+       "(live cameras; always on with --realtime)");
   flag("!--no-reversal-compensation", c.event_frame.reversal_compensation,
        "event_frame.reversal_compensation",
        "Event frames without the events a DVS loses at each brightness turn put back");

@@ -105,7 +105,13 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
     // decides again.
     if (!new_kf && !worker_.busy()) new_kf = keyframeDueBeforeNextFrame(T_f_kf);
   }
-  if (new_kf && worker_.busy()) {
+  if (new_kf && worker_.busy() && !cfg_.wait_for_keyframe &&
+      !wantKeyframe(flowOf(ref_.points, T_f_kf, cam_), alpha, kDeferLimit)) {
+    // A live camera cannot wait for the back-end: tracking goes on against the current reference and
+    // the next frame decides again, as long as the frame is not far from that reference.
+    new_kf = false;
+    ++res_.keyframes_deferred;
+  } else if (new_kf && worker_.busy()) {
     ++res_.backend_waits;
     // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
     // run away from its map), take the new reference and track again against it.
@@ -238,8 +244,8 @@ void FrameFrontend::setPending(int id, TimeNs t, const SE3& T_w_new, double a) {
   }
 }
 
-bool FrameFrontend::wantKeyframe(const Flow& fl, double alpha) const {
-  const double wh = cam_.width + cam_.height;
+bool FrameFrontend::wantKeyframe(const Flow& fl, double alpha, double scale) const {
+  const double wh = scale * (cam_.width + cam_.height);
   return fl.t > cfg_.policy.flow_t * wh || fl.rt > cfg_.policy.flow_rt * wh ||
          fl.in_view < cfg_.policy.min_in_view || std::abs(std::log(alpha)) > cfg_.policy.max_log_alpha;
 }

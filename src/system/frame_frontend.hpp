@@ -83,7 +83,12 @@ class FrameFrontend {
   bool keyframeDueBeforeNextFrame(const SE3& T_f_kf) const;
   // The next frame's pose if the last two frames' motion goes on (the last pose with only one).
   SE3 constantVelocityPose() const;
-  bool wantKeyframe(const Flow& fl, double alpha) const;
+  // The keyframe policy; `scale` > 1 widens its bounds on the flows (`scale` times larger).
+  bool wantKeyframe(const Flow& fl, double alpha, double scale = 1.0) const;
+  // Without wait_for_keyframe, a keyframe wanted while the back-end is busy waits for a later frame
+  // only while the frame's flows from the tracking reference are within this many times the policy's
+  // bounds (and its other bounds hold: points in view, brightness change).
+  static constexpr double kDeferLimit = 3.0;
   FrameTrackResult align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha, double& beta);
 
   CameraModel cam_;

@@ -230,6 +230,8 @@ struct OdometryResult {
   bool exposure_estimated = false, exposure_recorded = false, deblurred = false;
   int exposure_pairs = 0;
   std::size_t backend_waits = 0;     // times the tracking thread waited for the threaded back-end
+  // Without wait_for_keyframe: keyframes wanted while the back-end was busy, left to a later frame.
+  std::size_t keyframes_deferred = 0;
   std::size_t early_references = 0;  // keyframes tracked against before their bundle adjustment
   std::size_t buffered_thinned = 0;  // times the event frames kept during the bootstrap were thinned
   bool initialized = false;

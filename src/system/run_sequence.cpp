@@ -252,6 +252,7 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"keyframes", r.keyframes.size()},
                  {"map_points", r.map.size()},
                  {"backend_waits", r.backend_waits},
+                 {"keyframes_deferred", r.keyframes_deferred},
                  {"early_references", r.early_references},
                  {"bootstrap_event_frames_thinned", r.buffered_thinned}};
   j["deblur"] = {{"exposure_s", r.exposure_s},

@@ -85,5 +85,52 @@ TEST(FrameFrontend, ARefusedFrameWaitsForTheAdjustmentOfAPreliminaryReferenceTak
   EXPECT_FALSE(fe.referencePreliminary());
 }
 
+// The image from a camera moved by `tx` along x before this fronto-parallel texture at depth 2 m: the
+// texture shifted by fx · tx / 2 pixels.
+cv::Mat movedView(const Harness& h, double tx) {
+  const double px = h.cam.fx * tx * 0.5;
+  const cv::Mat M = (cv::Mat_<double>(2, 3) << 1, 0, -px, 0, 1, 0);
+  cv::Mat out;
+  cv::warpAffine(h.image, out, M, h.image.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  return out;
+}
+
+// Without waiting for keyframes (a live camera), a frame that wants a keyframe while the back-end is
+// still busy with the last one is tracked against the current reference and the keyframe left to a
+// later frame, unless the frame is far from that reference (three times the policy's bounds): then it
+// waits. Here the policy wants a keyframe beyond 9.2 px of translation flow: 15 px is left for later,
+// 40 px waits. Whether the back-end is still busy when the frame is tracked is up to the threads:
+// each attempt hands it a new keyframe first.
+TEST(FrameFrontend, WithoutWaitingAKeyframeIsDeferredWhileTheBackendIsBusyUnlessFar) {
+  Harness h;
+  h.cfg.wait_for_keyframe = false;
+  FrameFrontend fe(h.cam, h.cfg, h.res);
+  fe.addKeyframe(0, h.image, SE3(), 0, 0, h.points);
+  fe.awaitPendingKeyframe();
+  const auto attempt = [&](int k, double tx) {
+    // The reference at the origin, then another keyframe there for the back-end to work on.
+    fe.addKeyframe(fromSeconds(0.1 * k), h.image, SE3(), 0, 0, h.points);
+    fe.worker().waitIdle();
+    fe.adoptReference(false);
+    const int next_id = fe.worker().nextId();  // read while the back-end is idle
+    fe.addKeyframe(fromSeconds(0.1 * k + 0.01), h.image, SE3(), 0, 0, h.points);
+    const SE3 T_w_f(SO3(), Vec3(tx, 0, 0));
+    const SE3 T_w_out = fe.track(fromSeconds(0.1 * k + 0.05), movedView(h, tx), &T_w_f);
+    EXPECT_LT((T_w_out.translation() - T_w_f.translation()).norm(), 0.01);
+    fe.worker().waitIdle();
+    return fe.worker().nextId() - next_id - 1;  // keyframes the frame made
+  };
+  int k = 1;
+  for (; k < 20 && h.res.keyframes_deferred == 0; ++k) {
+    const int made = attempt(k, 0.15);
+    EXPECT_EQ(made, h.res.keyframes_deferred == 0 ? 1 : 0);
+  }
+  EXPECT_EQ(h.res.keyframes_deferred, 1u);
+  const std::size_t waits = h.res.backend_waits;
+  for (; k < 40 && h.res.backend_waits == waits; ++k) EXPECT_EQ(attempt(k, 0.4), 1);
+  EXPECT_EQ(h.res.backend_waits, waits + 1);
+  EXPECT_EQ(h.res.keyframes_deferred, 1u);
+}
+
 }  // namespace
 }  // namespace eds
