@@ -56,6 +56,23 @@ TEST(FrameFrontend, AUsableFrameTakesThePendingKeyframeOnceMapped) {
   EXPECT_FALSE(fe.referencePreliminary());
 }
 
+// ... and no longer than that: it tracks against the preliminary reference while the bundle adjustment
+// still runs. Whether the adjustment is done by then is up to the threads: each attempt hands the
+// back-end a new keyframe, and one of them must find the adjustment still running.
+TEST(FrameFrontend, AUsableFrameDoesNotWaitForTheAdjustment) {
+  Harness h;
+  FrameFrontend fe(h.cam, h.cfg, h.res);
+  h.startSecondKeyframe(fe);
+  fe.awaitPendingKeyframe();
+  for (int k = 2; k < 20 && !fe.referencePreliminary(); ++k) {
+    fe.worker().waitIdle();
+    fe.addKeyframe(fromSeconds(0.05 * k), h.image, SE3(SO3(), Vec3(0.01 * k, 0, 0)), 0, 0);
+    fe.awaitPendingKeyframe();
+    ASSERT_EQ(fe.referenceId(), k);
+  }
+  EXPECT_TRUE(fe.referencePreliminary());
+}
+
 TEST(FrameFrontend, ARefusedFrameWaitsForTheAdjustedKeyframe) {
   Harness h;
   FrameFrontend fe(h.cam, h.cfg, h.res);
