@@ -90,7 +90,7 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   const auto t0 = Clock::now();
   SE3 T_f_kf;
   double alpha = 1, beta = 0;
-  FrameTrackResult tr = align(img, prior, T_f_kf, alpha, beta);
+  FrameTrackResult tr = align(t, img, prior, T_f_kf, alpha, beta);
   Flow fl;
   bool new_kf;
   if (pending_.active) {
@@ -116,7 +116,7 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
     // The back-end is still mapping the previous keyframe: wait for it (so that an offline run cannot
     // run away from its map), take the new reference and track again against it.
     adoptReference(true);
-    tr = align(img, prior, T_f_kf, alpha, beta);
+    tr = align(t, img, prior, T_f_kf, alpha, beta);
     fl = flowOf(ref_.points, T_f_kf, cam_);
     new_kf = wantKeyframe(fl, alpha) || keyframeDueBeforeNextFrame(T_f_kf);
   }
@@ -136,14 +136,14 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   alpha_ = alpha, beta_ = beta;
   SE3 T_w_out = T_w_f;
   if (new_kf && tr.ok) T_w_out = addKeyframe(t, img, T_w_f, a_last_, b_last_);
-  setLast(T_w_out);
+  setLast(t, T_w_out);
   return T_w_out;
 }
 
 std::optional<SE3> FrameFrontend::trackRefused(TimeNs t, const cv::Mat& img, const SE3* prior) {
   // No usable frame aligned since the map (or its relocalization) began: nothing to compare with.
   if (!has_ref_ || !has_last_ || last_residuals_ == 0) return std::nullopt;
-  const SE3 T_w_start = prior ? *prior : constantVelocityPose();
+  const SE3 T_w_start = prior ? *prior : constantVelocityPose(t);
   SE3 T_f_kf = T_w_start.inverse() * T_w_kf_;
   double alpha = 1, beta = 0;
   const FrameTrackResult tr = tracker_.track(img, T_f_kf, alpha, beta, cfg_.prior_levels);
@@ -159,11 +159,11 @@ std::optional<SE3> FrameFrontend::trackRefused(TimeNs t, const cv::Mat& img, con
       T_start_f.so3().angle() > q.refused_max_turn_deg * M_PI / 180.0)
     return std::nullopt;
   ++res_.tracked;
-  setLast(T_w_f);
+  setLast(t, T_w_f);
   return T_w_f;
 }
 
-std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& found) {
+std::optional<SE3> FrameFrontend::relocalize(TimeNs t, const cv::Mat& img, std::string& found) {
   adoptReference(cfg_.threaded_backend);
   if (!has_ref_) {
     found = "no reference to relocalize against";
@@ -190,17 +190,24 @@ std::optional<SE3> FrameFrontend::relocalize(const cv::Mat& img, std::string& fo
   alpha_ = alpha, beta_ = beta;
   last_rmse_ = tr.rmse, last_residuals_ = tr.residuals;
   has_last_ = has_prev_ = false;  // at rest: the velocity before the loss means nothing now
-  setLast(T_w_kf_ * T_f_kf.inverse());
+  setLast(t, T_w_kf_ * T_f_kf.inverse());
   return last_T_w_f_;
 }
 
-SE3 FrameFrontend::constantVelocityPose() const {
-  return has_prev_ ? last_T_w_f_ * (prev_T_w_f_.inverse() * last_T_w_f_) : last_T_w_f_;
+SE3 FrameFrontend::constantVelocityPose(TimeNs t) const {
+  if (!has_prev_ || last_t_ <= prev_t_) return last_T_w_f_;
+  const SE3 step = prev_T_w_f_.inverse() * last_T_w_f_;
+  // Frames evenly spaced: one step, exactly. Otherwise the step scaled to the time since the last frame
+  // (frames dropped, or taken irregularly by a real-time consumer that is behind), at most kMaxCvSteps.
+  if (t - last_t_ == last_t_ - prev_t_) return last_T_w_f_ * step;
+  const double steps =
+      std::clamp(static_cast<double>(t - last_t_) / static_cast<double>(last_t_ - prev_t_), 0.0, kMaxCvSteps);
+  return last_T_w_f_ * SE3::exp(steps * step.log());
 }
 
-void FrameFrontend::setLast(const SE3& T_w_f) {
-  if (has_last_) prev_T_w_f_ = last_T_w_f_, has_prev_ = true;
-  last_T_w_f_ = T_w_f;
+void FrameFrontend::setLast(TimeNs t, const SE3& T_w_f) {
+  if (has_last_) prev_T_w_f_ = last_T_w_f_, prev_t_ = last_t_, has_prev_ = true;
+  last_T_w_f_ = T_w_f, last_t_ = t;
   has_last_ = true;
 }
 
@@ -270,9 +277,9 @@ bool FrameFrontend::keyframeDueBeforeNextFrame(const SE3& T_f_kf) const {
 
 // Aligns the frame to the reference from the prior (the event pose) or a constant-velocity
 // prediction, trying DSO's other starting points when that fails.
-FrameTrackResult FrameFrontend::align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha,
-                                      double& beta) {
-  const SE3 T_w_cv = constantVelocityPose();
+FrameTrackResult FrameFrontend::align(TimeNs t, const cv::Mat& img, const SE3* prior, SE3& T_f_kf,
+                                      double& alpha, double& beta) {
+  const SE3 T_w_cv = constantVelocityPose(t);
   const SE3 T_w_pred = prior ? *prior : T_w_cv;
   T_f_kf = T_w_pred.inverse() * T_w_kf_;
   alpha = alpha_, beta = beta_;

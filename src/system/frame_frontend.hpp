@@ -48,9 +48,13 @@ class FrameFrontend {
   // The frame's pose with no starting point (features against the newest reference, then the direct
   // alignment from there, all levels); on success the track goes on from it, at rest. nullopt when
   // neither finds the frame. `found` says how (matches and inliers), or why not.
-  std::optional<SE3> relocalize(const cv::Mat& img, std::string& found);
+  std::optional<SE3> relocalize(TimeNs t, const cv::Mat& img, std::string& found);
 
-  void setLast(const SE3& T_w_f);
+  void setLast(TimeNs t, const SE3& T_w_f);
+  // The pose at t (a frame's time) if the last two frames' motion goes on (the last pose with
+  // only one), the last motion scaled to the time since the last frame.
+  SE3 constantVelocityPose(TimeNs t) const;
+  static constexpr double kMaxCvSteps = 4.0;  // the most steps of the last motion it extrapolates
   void setLastBrightness(double a, double b) { a_last_ = a, b_last_ = b; }
   // Takes the newest reference the back-end published (waiting for it if asked); true if it changed.
   bool adoptReference(bool wait);
@@ -81,15 +85,14 @@ class FrameFrontend {
 
  private:
   bool keyframeDueBeforeNextFrame(const SE3& T_f_kf) const;
-  // The next frame's pose if the last two frames' motion goes on (the last pose with only one).
-  SE3 constantVelocityPose() const;
   // The keyframe policy; `scale` > 1 widens its bounds on the flows (`scale` times larger).
   bool wantKeyframe(const Flow& fl, double alpha, double scale = 1.0) const;
   // Without wait_for_keyframe, a keyframe wanted while the back-end is busy waits for a later frame
   // only while the frame's flows from the tracking reference are within this many times the policy's
   // bounds (and its other bounds hold: points in view, brightness change).
   static constexpr double kDeferLimit = 3.0;
-  FrameTrackResult align(const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha, double& beta);
+  FrameTrackResult align(TimeNs t, const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha,
+                         double& beta);
 
   CameraModel cam_;
   const OdometryConfig& cfg_;
@@ -107,6 +110,7 @@ class FrameFrontend {
   double last_rmse_ = 1e9;          // of the last successful alignment
   int last_residuals_ = 0;          // and its residual count
   SE3 last_T_w_f_, prev_T_w_f_;
+  TimeNs last_t_ = 0, prev_t_ = 0;
   bool has_last_ = false, has_prev_ = false;
   Pending pending_;
   void setPending(int id, TimeNs t, const SE3& T_w_new, double a);

@@ -241,10 +241,10 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
     res_.frame_anchors.push_back({ref_id, boot_traj[k].T_w_c});
     frame_ok_.push_back(1);
   }
-  odo_->setLast(boot_traj[boot_traj.size() - 2].T_w_c);
+  odo_->setLast(boot_traj[boot_traj.size() - 2].t, boot_traj[boot_traj.size() - 2].T_w_c);
   odo_->setLastBrightness(last.a, last.b);
   const SE3 T_w_f = odo_->addKeyframe(t, img, last.T_ref_c, last.a, last.b);
-  odo_->setLast(T_w_f);
+  odo_->setLast(t, T_w_f);
   res_.frames.push_back({t, T_w_f});
   res_.frame_anchors.push_back({ref_id, T_w_f});
   frame_ok_.push_back(1);
@@ -346,7 +346,7 @@ bool OdometryCore::recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& fou
   TrackLoss& loss = res_.losses.back();
   ++loss.attempts;
   std::string how;
-  found = odo_->relocalize(img, how);
+  found = odo_->relocalize(t, img, how);
   if (!found) {
     res_.failures.push_back({t, "track lost, relocalization: " + how});
     // The map is no help any more: a new one starts from this frame.

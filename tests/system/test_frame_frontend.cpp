@@ -149,5 +149,26 @@ TEST(FrameFrontend, WithoutWaitingAKeyframeIsDeferredWhileTheBackendIsBusyUnless
   EXPECT_EQ(h.res.keyframes_deferred, 1u);
 }
 
+// The constant-velocity start of a frame's alignment goes on with the last two frames' motion for the
+// time since the last frame: frames a real-time consumer takes irregularly, or after dropped ones,
+// start where the camera is, not one step of the last motion further (at most 4 steps).
+TEST(FrameFrontend, TheConstantVelocityPredictionFollowsTheTimeSinceTheLastFrame) {
+  Harness h;
+  FrameFrontend fe(h.cam, h.cfg, h.res);
+  const SE3 T_w_0(SO3::exp(Vec3(0, 0.1, 0)), Vec3(0.5, 0, 0));
+  const SE3 step(SO3::exp(Vec3(0.01, 0.02, 0)), Vec3(0.01, 0, 0.002));
+  fe.setLast(fromSeconds(1.0), T_w_0);
+  EXPECT_LT((fe.constantVelocityPose(fromSeconds(1.5)).inverse() * T_w_0).log().norm(), 1e-12);  // one frame
+  fe.setLast(fromSeconds(1.04), T_w_0 * step);
+  const auto off = [&](TimeNs t, const SE3& expected) {
+    return (fe.constantVelocityPose(t).inverse() * expected).log().norm();
+  };
+  EXPECT_LT(off(fromSeconds(1.08), T_w_0 * step * step), 1e-12);
+  EXPECT_LT(off(fromSeconds(1.16), T_w_0 * step * step * step * step), 1e-9);
+  EXPECT_LT(off(fromSeconds(1.06), T_w_0 * step * SE3::exp(0.5 * step.log())), 1e-9);
+  const SE3 four = T_w_0 * step * SE3::exp(4.0 * step.log());
+  EXPECT_LT(off(fromSeconds(3.0), four), 1e-9);
+}
+
 }  // namespace
 }  // namespace eds
