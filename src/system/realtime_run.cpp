@@ -16,7 +16,6 @@ namespace eds {
 namespace {
 
 using Clock = ReleasedItem::Clock;
-using Item = ReleasedItem;
 
 // The camera: releases the selected frames and the events up to the plan's end at their times.
 void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,
@@ -24,7 +23,7 @@ void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,
                 ReleaseQueue& queue) {
   MergedStream stream(seq, 2000, use_events);  // about a USB transfer's worth of events
   std::size_t next = 0;
-  Item item;
+  ReleasedItem item;
   for (auto kind = stream.next(item.events, item.index); kind != MergedStream::Kind::kEnd;
        kind = stream.next(item.events, item.index)) {
     if (stopped()) break;
@@ -50,7 +49,7 @@ void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,
     }
     item.released = Clock::now();
     queue.push(std::move(item));
-    item = Item{};
+    item = ReleasedItem{};
   }
 }
 
@@ -110,7 +109,7 @@ class StrideControl {
 // The processing: what was released, unless it waited too long (chunks) or is stale (frames).
 void consume(const Sequence& seq, const RealtimeOptions& options, const ReleaseFn& release,
              ReleaseQueue& queue, Odometry& odo, OdometryResult::Realtime& rt) {
-  Item item;
+  ReleasedItem item;
   bool newer_frame = false;
   const auto max_wait = std::chrono::duration<double>(options.max_latency_s);
   StrideControl stride(options.max_latency_s);
