@@ -28,10 +28,11 @@ class PacketStarts {
  public:
   PacketStarts(std::size_t stride, double max_rate_hz)
       : stride_(stride), period_(max_rate_hz > 0 ? fromSeconds(1.0 / max_rate_hz) : 0) {}
-  // After a packet at pos: the next start, before any skipping.
-  void advance(const EventArray& buf, std::size_t& pos) {
+  // After a packet at pos: the next start, before any skipping. With `every` > 1 the next every - 1
+  // packets are passed over (not built): a consumer that falls behind.
+  void advance(const EventArray& buf, std::size_t& pos, std::size_t every = 1) {
     t_min_ = buf.t[pos] + period_;
-    pos += stride_;
+    pos += stride_ * every;
   }
   // Skips the events before the earliest time allowed; true when pos moved.
   bool skip(const EventArray& buf, std::size_t& pos) const {

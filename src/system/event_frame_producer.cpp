@@ -74,11 +74,13 @@ void EventFrameProducer::step(const EventArray& ev, std::size_t a, std::size_t b
 
 void EventFrameProducer::append(const EventArray& ev, std::size_t a, std::size_t b) {
   const ScopedStage stage(clock_, Stage::kEventIntake);
-  // Drops the events before the next packet: the builder's per-pixel memory has run past them.
+  // Drops the events before the next packet: the builder's per-pixel memory has run past them. Packets
+  // passed over may put that packet beyond the events received so far.
   if (pos_ > (1u << 20)) {
-    eraseFront(buf_, pos_);
-    base_ += pos_;
-    pos_ = 0;
+    const std::size_t n = std::min(pos_, buf_.size());
+    eraseFront(buf_, n);
+    base_ += n;
+    pos_ -= n;
   }
   // Sized for all, then cut to those kept: no capacity check per event.
   std::size_t n = buf_.size();
@@ -111,7 +113,9 @@ void EventFrameProducer::buildPackets(bool at_end) {
     }
     builder_.build(buf_, pos_, ef, base_);
     built_.push_back(std::move(ef));
-    starts_.advance(buf_, pos_);
+    const std::size_t every = every_.load(std::memory_order_relaxed);
+    starts_.advance(buf_, pos_, every);
+    passing_ += every - 1;
   }
   {
     const std::lock_guard lk(mutex_);
@@ -119,6 +123,7 @@ void EventFrameProducer::buildPackets(bool at_end) {
     has_next_ = pos_ < buf_.size();
     if (has_next_) next_start_ = buf_.t[pos_];
     dropped_ = flicker_.dropped();
+    passed_ = passing_;
     newest_ = newest_appended_;
   }
   if (threaded_ && !built_.empty()) cv_.notify_all();
@@ -219,6 +224,11 @@ void EventFrameProducer::recycle(EventFrame&& ef) {
 TimeNs EventFrameProducer::newestEvent() const {
   const std::lock_guard lk(mutex_);
   return newest_;
+}
+
+std::size_t EventFrameProducer::packetsPassed() const {
+  const std::lock_guard lk(mutex_);
+  return passed_;
 }
 
 std::size_t EventFrameProducer::flickerDropped() const {

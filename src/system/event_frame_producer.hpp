@@ -4,6 +4,7 @@
 // thread of its own beside the tracking (a pipeline with a bounded input queue): the frames it builds
 // are the same as without, and the consumer asks for all queued work to be done (drain) before any
 // decision that depends on what has not been built yet, so the results do not change either.
+#include <atomic>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -50,6 +51,11 @@ class EventFrameProducer {
   // Whether the next packet to be built (as far as the events processed so far tell) starts at or
   // after t: then no event frame still to come is earlier than t.
   bool nextPacketStartsAtOrAfter(TimeNs t) const;
+  // From the next packet on, only every k-th packet is built (k >= 1; any thread): load shedding that
+  // costs nothing for the packets passed over.
+  void setEvery(std::size_t k) { every_.store(k, std::memory_order_relaxed); }
+  // Packets passed over so far (setEvery).
+  std::size_t packetsPassed() const;
   // A processed event frame's image back for reuse.
   void recycle(EventFrame&& ef);
   std::size_t flickerDropped() const;
@@ -77,6 +83,8 @@ class EventFrameProducer {
   std::size_t pos_ = 0;
   std::uint64_t base_ = 0;
   std::vector<EventFrame> built_;  // this step's frames, before they are published
+  std::atomic<std::size_t> every_{1};
+  std::size_t passing_ = 0;  // packets passed over (the working thread's count)
   TimeNs newest_appended_ = std::numeric_limits<TimeNs>::min();
 
   bool threaded_;
@@ -94,7 +102,7 @@ class EventFrameProducer {
   bool has_next_ = false;  // buf_ holds the next packet's first event, at next_start_
   TimeNs next_start_ = 0;
   TimeNs newest_ = std::numeric_limits<TimeNs>::min();
-  std::size_t dropped_ = 0;
+  std::size_t dropped_ = 0, passed_ = 0;
   std::exception_ptr error_;
   std::thread thread_;
 };

@@ -129,6 +129,7 @@ class Odometry::Impl {
     core_.finish();
     reportRecordedExposure();
     res_.events_flicker_dropped = producer_.flickerDropped();
+    res_.event_frames_shed = producer_.packetsPassed();
     res_.event_thread = producer_.threaded();
     if (res_.event_thread) res_.event_stages_s = producer_.threadStageSeconds();
     const ScopedStage results(&clock_, Stage::kResults);
@@ -144,7 +145,7 @@ class Odometry::Impl {
   const OdometryResult& result() const { return res_; }
   void setEventFrameStride(int k) {
     if (k < 1) throw std::invalid_argument("Odometry: event frame stride must be at least 1");
-    if (k != stride_) stride_ = k, stride_phase_ = 0;
+    producer_.setEvery(static_cast<std::size_t>(k));
   }
   OdometryResult takeResult() {
     if (!finished_) throw std::logic_error("Odometry: takeResult() before finish()");
@@ -300,8 +301,6 @@ class Odometry::Impl {
       if (ef.t < last_frame_done_) {
         // A frame after it went ahead (the events stalled): too late to be tracked in order.
         res_.failures.push_back({ef.t, "event frame: arrived after a later frame was processed"});
-      } else if (stride_ > 1 && stride_phase_++ % stride_ != 0) {
-        ++res_.event_frames_shed;
       } else {
         core_.eventFrame(ef);
       }
@@ -340,8 +339,6 @@ class Odometry::Impl {
   OdometryCore core_;
   EventFrameProducer producer_;  // flicker filter, event buffer, event frames
   std::size_t events_in_ = 0;
-  int stride_ = 1;  // every stride_-th event frame is tracked
-  std::size_t stride_phase_ = 0;
   // The newest event checked (the waits measure from the newest the producer has processed, so that
   // they do not depend on the chunk size).
   TimeNs checked_t_ = std::numeric_limits<TimeNs>::min();

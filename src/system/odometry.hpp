@@ -229,7 +229,7 @@ struct OdometryResult {
   double exposure_s = 0;
   bool exposure_estimated = false, exposure_recorded = false, deblurred = false;
   int exposure_pairs = 0;
-  std::size_t backend_waits = 0;     // times the tracking thread waited for the threaded back-end
+  std::size_t backend_waits = 0;  // times the tracking thread waited for the threaded back-end
   // Without wait_for_keyframe: keyframes wanted while the back-end was busy, left to a later frame.
   std::size_t keyframes_deferred = 0;
   std::size_t early_references = 0;  // keyframes tracked against before their bundle adjustment
@@ -262,7 +262,7 @@ struct OdometryResult {
     std::size_t events_skipped = 0, frames_skipped = 0;
     int max_event_frame_stride = 1;  // the most event frames shed: all but every k-th (see below)
   } realtime;
-  std::size_t event_frames_shed = 0;  // built but not tracked (Odometry::setEventFrameStride)
+  std::size_t event_frames_shed = 0;  // passed over, never built (Odometry::setEventFrameStride)
 };
 
 // The start times of map segments 1, 2, ... (segment 0 holds everything before the first).
@@ -337,7 +337,7 @@ class Odometry {
   // The result so far (poses as tracked, counts, failures); complete after finish().
   const OdometryResult& result() const;
   // Load shedding for a live caller that falls behind: from now on only every k-th event frame is
-  // tracked (k = 1, the default: all); the others are counted in event_frames_shed. The event
+  // built and tracked (k = 1, the default: all); the others are counted in event_frames_shed. The event
   // tracker's steps grow by k, which it follows at hand-held speeds; frames and keyframes are kept.
   void setEventFrameStride(int k);
   // After finish(): moves the result out (no copy of the keyframes and map); result() is then empty.

@@ -2,8 +2,8 @@
 // A recorded sequence fed to the odometry on the wall clock, as a camera driver would: a producer
 // thread releases each chunk of events and each frame when its time comes (at `speed` times real time),
 // and the calling thread processes what was released. When processing falls behind, it sheds load
-// rather than fall further behind: first it tracks only every 2nd, 4th or 8th event frame (the
-// stride rises while items wait and falls once they do not); then event chunks released more than
+// rather than fall further behind: first it builds and tracks only every 2nd, 4th or 8th event frame
+// (the stride rises while items wait and falls once they do not); then event chunks released more than
 // `max_latency_s` ago are dropped (the odometry sees a gap, as after a USB drop) and a frame is
 // dropped when a newer one is already waiting, but never so many that the frames taken come fewer
 // than `min_frame_rate_hz` per sensor second; the queue between the threads is bounded. The
@@ -16,8 +16,10 @@
 namespace eds {
 
 struct RealtimeOptions {
-  double speed = 1.0;          // sensor seconds per wall second
-  double max_latency_s = 0.1;  // wall time an event chunk may wait before it is dropped
+  double speed = 1.0;  // sensor seconds per wall second
+  // Wall time an event chunk may wait before it is dropped. Long enough for the backlog of a bootstrap
+  // or a keyframe to be worked off at a higher stride: a dropped chunk is a gap in the event poses.
+  double max_latency_s = 0.5;
   // Behind, frames are dropped for newer ones only while the last one taken is less than 1 / this
   // (sensor time) before: a consumer that is always behind would otherwise drop every frame, and the
   // frame tracker's basin, not the events, must bound the motion between two frames.

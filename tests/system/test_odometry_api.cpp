@@ -237,9 +237,9 @@ TEST(OdometryApi, ThreadedBackendFromAProducerThreadIsAccurate) {
   expectStagesAccountForTheWallTime(r, true);
 }
 
-// Load shedding: with every third event frame tracked, two in three are counted as shed, the tracker
-// follows the larger steps, and the event-rate poses stay within 1.5 times the full run's error (ESIM:
-// 0.088 against 0.087 cm, rotation 0.087 against 0.111 degrees).
+// Load shedding: with every third event frame built and tracked, two in three are counted as shed, the
+// tracker follows the larger steps, and the event-rate poses stay within 1.5 times the full run's error
+// (ESIM: 0.088 against 0.087 cm, rotation 0.087 against 0.111 degrees).
 TEST(OdometryApi, EveryThirdEventFrameTrackedUnderLoadShedding) {
   EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
   const Sequence seq(dir);
@@ -250,8 +250,10 @@ TEST(OdometryApi, EveryThirdEventFrameTrackedUnderLoadShedding) {
   const OdometryResult& r = feed(odo, seq, allEvents(seq), 100000);
   ASSERT_TRUE(r.initialized);
   EXPECT_EQ(full.event_frames_shed, 0u);
-  const std::size_t built = r.event_frames + r.event_frames_shed;  // event_frames: those handed on
-  EXPECT_EQ(built, full.event_frames);
+  // event_frames: those built and handed on; the last stride may pass over packets the stream lacks.
+  const std::size_t built = r.event_frames + r.event_frames_shed;
+  EXPECT_GE(built, full.event_frames);
+  EXPECT_LE(built, full.event_frames + 2);
   const double shed = static_cast<double>(r.event_frames_shed) / static_cast<double>(built);
   EXPECT_NEAR(shed, 2.0 / 3.0, 0.03);
   EXPECT_NEAR(static_cast<double>(r.events_tracked), static_cast<double>(full.events_tracked) / 3.0,
