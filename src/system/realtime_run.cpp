@@ -32,6 +32,7 @@ void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,
       if (next == plan.frames.size() || plan.frames[next] != item.index) continue;
       ++next;
       item.image = seq.loadFrame(item.index);
+      item.t = seq.frames()[item.index].t;
       std::this_thread::sleep_until(release(seq.frames()[item.index].t));
     } else {
       const auto end =

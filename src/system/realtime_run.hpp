@@ -25,8 +25,9 @@ struct RealtimeOptions {
   // frame tracker's basin, not the events, must bound the motion between two frames.
   double min_frame_rate_hz = 10.0;
   std::size_t max_queued_events = 4'000'000;  // the producer drops its oldest chunks beyond this
-  // And its oldest frames beyond this: where even min_frame_rate_hz is more than the processing
-  // does, the frames it takes fall behind by at most this many.
+  // And frames beyond this, thinned so that those kept stay spread over the backlog (a run of
+  // dropped frames is a gap the events must bridge): where even min_frame_rate_hz is more than the
+  // processing does, at most this many frames wait.
   std::size_t max_queued_frames = 32;
 };
 

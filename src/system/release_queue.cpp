@@ -1,6 +1,7 @@
 #include "system/release_queue.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace eds {
 
@@ -9,18 +10,37 @@ void ReleaseQueue::push(ReleasedItem item) {
   queued_events_ += item.events.size();
   queued_frames_ += item.frame;
   items_.push_back(std::move(item));
-  while (queued_events_ > max_events_) dropOldest(false);  // the chunks hold all queued events
-  while (queued_frames_ > max_frames_) dropOldest(true);
+  while (queued_events_ > max_events_) dropOldestChunk();  // the chunks hold all queued events
+  while (queued_frames_ > max_frames_) thinFrames();
   ready_.notify_one();
 }
 
-void ReleaseQueue::dropOldest(bool frame) {
-  const auto it =
-      std::find_if(items_.begin(), items_.end(), [&](const ReleasedItem& i) { return i.frame == frame; });
+void ReleaseQueue::dropOldestChunk() {
+  const auto it = std::find_if(items_.begin(), items_.end(), [](const ReleasedItem& i) { return !i.frame; });
   queued_events_ -= it->events.size();
   dropped_events_ += it->events.size();
-  queued_frames_ -= frame, dropped_frames_ += frame;
   items_.erase(it);
+}
+
+// Drops the frame, never the newest, whose neighbours are closest in time: the earliest of equals. The
+// oldest queued frame's neighbour before it is the last popped; before any, it is kept (the start)
+// unless only two frames are queued.
+void ReleaseQueue::thinFrames() {
+  auto best = items_.end();
+  TimeNs best_gap = std::numeric_limits<TimeNs>::max();
+  auto prev = items_.end(), cur = items_.end();
+  for (auto it = items_.begin(); it != items_.end(); ++it) {
+    if (!it->frame) continue;
+    if (cur != items_.end() && (prev != items_.end() || has_popped_frame_)) {
+      const TimeNs gap = it->t - (prev != items_.end() ? prev->t : last_frame_t_);
+      if (gap < best_gap) best_gap = gap, best = cur;
+    }
+    prev = cur, cur = it;
+  }
+  if (best == items_.end())  // two frames and none popped: the older goes
+    best = std::find_if(items_.begin(), items_.end(), [](const ReleasedItem& i) { return i.frame; });
+  --queued_frames_, ++dropped_frames_;
+  items_.erase(best);
 }
 
 void ReleaseQueue::close() {
@@ -49,6 +69,7 @@ bool ReleaseQueue::pop(ReleasedItem& out, bool& newer_frame) {
   items_.pop_front();
   queued_events_ -= out.events.size();
   queued_frames_ -= out.frame;
+  if (out.frame) last_frame_t_ = out.t, has_popped_frame_ = true;
   newer_frame = std::any_of(items_.begin(), items_.end(), [](const ReleasedItem& i) { return i.frame; });
   return true;
 }

@@ -108,13 +108,14 @@ TEST(Realtime, FramesBehindAreTakenAtTheMinimumRate) {
   for (std::size_t i = 1; i < taken.size(); ++i) EXPECT_EQ(taken[i] - taken[i - 1], 120'000'000LL);
 }
 
-// A consumer that takes nothing while the camera pushes: beyond the bounds the oldest frames and the
-// oldest event chunks go (each kind on its own), counted; what stays comes out in order, and a frame
-// reports whether a newer one is waiting.
-TEST(Realtime, TheReleaseQueueDropsItsOldestBeyondItsBounds) {
+// A consumer that takes nothing while the camera pushes: beyond the bounds the oldest event chunks go,
+// and the frames are thinned: each time the one whose neighbours are closest, never the newest, and
+// before any frame was taken never the oldest either (each kind on its own), counted; what stays
+// comes out in order, and a frame reports whether a newer one is waiting.
+TEST(Realtime, TheReleaseQueueDropsItsOldestChunksAndThinsItsFramesBeyondItsBounds) {
   ReleaseQueue queue(2500, 4);
   for (std::size_t k = 0; k < 10; ++k) {
-    ReleasedItem frame{.frame = true, .index = k};
+    ReleasedItem frame{.frame = true, .index = k, .t = static_cast<TimeNs>(k)};
     queue.push(std::move(frame));
     ReleasedItem chunk;
     for (int e = 0; e < 1000; ++e) chunk.events.push_back(static_cast<TimeNs>(k), 1, 2, 1);
@@ -134,9 +135,38 @@ TEST(Realtime, TheReleaseQueueDropsItsOldestBeyondItsBounds) {
     else
       chunks.push_back(item.events.t.front());
   }
-  EXPECT_EQ(frames, (std::vector<std::size_t>{6, 7, 8, 9}));
+  EXPECT_EQ(frames, (std::vector<std::size_t>{0, 4, 7, 9}));
   EXPECT_EQ(newer, (std::vector<bool>{true, true, true, false}));
   EXPECT_EQ(chunks, (std::vector<TimeNs>{8, 9}));
+}
+
+std::vector<TimeNs> frameTimes(ReleaseQueue& queue) {
+  std::vector<TimeNs> t;
+  ReleasedItem item;
+  bool newer_frame = false;
+  while (queue.pop(item, newer_frame)) t.push_back(item.t);
+  return t;
+}
+
+// Once a frame was taken, the oldest queued frame's gap runs from it; with room for one frame, the
+// newer of two stays.
+TEST(Realtime, TheReleaseQueueThinsFromTheLastFrameTaken) {
+  ReleaseQueue queue(1000, 3);
+  const auto push = [&](TimeNs t) { queue.push(ReleasedItem{.frame = true, .t = t}); };
+  push(0);
+  ReleasedItem item;
+  bool newer_frame = false;
+  ASSERT_TRUE(queue.pop(item, newer_frame));
+  for (const TimeNs t : {10, 11, 12, 30}) push(t);  // 11 goes: 12 - 10 is the shortest gap
+  push(31);                                         // 10 goes: 12 - 0 against 30 - 10 and 31 - 12
+  queue.close();
+  EXPECT_EQ(frameTimes(queue), (std::vector<TimeNs>{12, 30, 31}));
+  EXPECT_EQ(queue.droppedFrames(), 2u);
+  ReleaseQueue one(1000, 1);
+  one.push(ReleasedItem{.frame = true, .t = 5});
+  one.push(ReleasedItem{.frame = true, .t = 6});
+  one.close();
+  EXPECT_EQ(frameTimes(one), (std::vector<TimeNs>{6}));
 }
 
 TEST(Realtime, AStopRequestEndsTheRun) {
