@@ -33,7 +33,7 @@ void releaseAll(const Sequence& seq, const RunPlan& plan, bool use_events,
       ++next;
       item.image = seq.loadFrame(item.index);
       item.t = seq.frames()[item.index].t;
-      std::this_thread::sleep_until(release(seq.frames()[item.index].t));
+      std::this_thread::sleep_until(release(item.t));
     } else {
       const auto end =
           std::upper_bound(item.events.t.begin(), item.events.t.end(), plan.t_end) - item.events.t.begin();
