@@ -122,13 +122,12 @@ void expectWithinCleanBounds(const eval::AteResult& a, test::Measured clean, boo
   EXPECT_GE(a.coverage, 0.9);
 }
 
-// The frames' exposure, unless given, is estimated from the first frames with motion and their events:
-// within 6 ms of the simulated one (the estimate runs 3-4 ms long on these noisy sensors).
-void expectCarriedThrough(Variant v, double ratio) {
-  EDS_REQUIRE_SHARED(traj, "trajectories/ecd_poster_6dof_groundtruth.txt");
+// One run with frame faults: what must hold on every run, the accuracy bounds aside.
+eval::AteResult expectFaultsHandled(Variant v) {
   OdometryResult r;
   const eval::AteResult a = runDesk(v, r);
-  expectWithinCleanBounds(a, cleanRun(v), true, ratio);
+  EXPECT_LE(a.rot.max, 1.0);
+  EXPECT_GE(a.coverage, 0.9);
   EXPECT_EQ(r.exposure_estimated, !v.deblur);
   EXPECT_NEAR(r.exposure_s, v.exposure_s, 0.006);
   EXPECT_EQ(r.deblurred, v.deblur || v.exposure_s >= OdometryConfig{}.deblur.min_exposure_s);
@@ -159,6 +158,26 @@ void expectCarriedThrough(Variant v, double ratio) {
     EXPECT_FALSE((s >= 2.99 && s < 4.0) || (s >= 4.99 && s < 5.5)) << "keyframe at " << s << " s";
   }
   EXPECT_LE(lost_event_frames, r.events_tracked / 100);
+  return a;
+}
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// The frames' exposure, unless given, is estimated from the first frames with motion and their events:
+// within 6 ms of the simulated one (the estimate runs 3-4 ms long on these noisy sensors). The threaded
+// back-end's results vary from run to run, so its ATE is the median of `runs` runs against the clean
+// runs' median.
+void expectCarriedThrough(Variant v, double ratio, int runs = 1) {
+  EDS_REQUIRE_SHARED(traj, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  std::vector<double> ate_cm, clean_cm;
+  for (int i = 0; i < runs; ++i) {
+    ate_cm.push_back(expectFaultsHandled(v).trans.rmse * 100);
+    clean_cm.push_back(cleanRun(v).ate_cm);
+  }
+  EXPECT_LE(median(ate_cm), ratio * median(clean_cm));
 }
 
 // Sharp: 0.040 against 0.028 cm (1.43x). Blurred: over the half second of blown-out frames nothing
@@ -172,9 +191,10 @@ TEST(BadFrames, DimmedAndOverexposedFramesMotionBlurKeyframesDeblurred) {
 }
 // The default threaded back-end: a refused frame after a keyframe waits for it to be mapped, as a usable
 // one does, so that the events carry the pose against the mapped keyframe (0.038 against 0.028 cm;
-// before, against the keyframe's frame for the 0.4 s of sequence the mapping took: 0.056, 2.0x).
+// before, against the keyframe's frame for the 0.4 s of sequence the mapping took: 0.056, 2.0x). Single
+// runs spread over 0.035-0.045 against 0.027-0.031 cm (1.21-1.53x), hence the medians of three.
 TEST(BadFrames, DimmedAndOverexposedFramesSharpThreadedBackend) {
-  expectCarriedThrough({.exposure_s = 0.01, .frame_faults = true, .threaded = true}, 1.5);
+  expectCarriedThrough({.exposure_s = 0.01, .frame_faults = true, .threaded = true}, 1.5, 3);
 }
 
 // Without events the dimmed frames, aligned for a pose only, carry the track through their second: the
