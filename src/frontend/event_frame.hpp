@@ -56,6 +56,9 @@ struct EventFrame {
   TimeNs t = 0;  // the median event's time
   TimeNs t_first = 0, t_last = 0;
   cv::Mat delta;  // CV_32F, undistorted pixel grid, unit L2 norm (all zero if no events)
+  // Packets passed over unbuilt right before this one (load shedding): the motion since the last
+  // event frame tracked spans that many more steps.
+  std::size_t passed_before = 0;
 };
 
 class EventFrameBuilder {

@@ -112,10 +112,12 @@ void EventFrameProducer::buildPackets(bool at_end) {
       }
     }
     builder_.build(buf_, pos_, ef, base_);
+    ef.passed_before = passed_last_;
     built_.push_back(std::move(ef));
     const std::size_t every = every_.load(std::memory_order_relaxed);
     starts_.advance(buf_, pos_, every);
     passing_ += every - 1;
+    passed_last_ = every - 1;
   }
   {
     const std::lock_guard lk(mutex_);

@@ -84,7 +84,8 @@ class EventFrameProducer {
   std::uint64_t base_ = 0;
   std::vector<EventFrame> built_;  // this step's frames, before they are published
   std::atomic<std::size_t> every_{1};
-  std::size_t passing_ = 0;  // packets passed over (the working thread's count)
+  std::size_t passing_ = 0;      // packets passed over (the working thread's count)
+  std::size_t passed_last_ = 0;  // of them, those right after the last packet built
   TimeNs newest_appended_ = std::numeric_limits<TimeNs>::min();
 
   bool threaded_;

@@ -210,9 +210,12 @@ std::optional<SE3> EventFrontend::track(const EventFrame& ef, const SE3* prior, 
   }
   PosePrior motion;
   const bool use_motion = !prior && motionPrior(ef.t, motion);
-  // Coarse-to-fine only when the prediction is weak (first frames on a reference); a frame's
-  // correction or a constant-velocity prediction is close enough for the finest level alone.
-  const int levels = !prior && (t_prev_ >= 0 || corrected_) ? 1 : 0;
+  // Coarse-to-fine only when the prediction is weak: the first frames on a reference, or after three or
+  // more event frames passed over (load shedding), where the constant-velocity prediction spans four
+  // steps or more. A frame's correction, or that prediction over fewer steps, is close enough for the
+  // finest level alone.
+  const bool long_step = ef.passed_before >= kPassedForCoarseToFine;
+  const int levels = !prior && !long_step && (t_prev_ >= 0 || corrected_) ? 1 : 0;
   corrected_ = false;
   return solve(ef, T_init, levels, use_motion ? &motion : nullptr, failure);
 }

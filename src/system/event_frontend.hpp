@@ -157,6 +157,8 @@ class EventFrontend {
   static constexpr std::size_t kRecent = 5;
   std::array<double, kRecent> recent_corr_{}, recent_cost_{};
   std::size_t recent_n_ = 0;
+  // Event frames passed over right before one (load shedding) from which it is solved coarse-to-fine.
+  static constexpr std::size_t kPassedForCoarseToFine = 3;
   // Times of the last event frames given to the tracker (ring buffer), for their rate.
   static constexpr std::size_t kRateWindow = 16;
   std::array<TimeNs, kRateWindow> ef_times_{};

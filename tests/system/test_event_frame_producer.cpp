@@ -1,6 +1,7 @@
 // The event-frame producer's load shedding: with every k-th packet built, the frames it builds are those
 // of the full stream at every k-th start, on and off its thread, and the packets passed over are
-// counted; passing over packets never reads past the events received.
+// counted, in total and before each frame built; passing over packets never reads past the events
+// received.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -60,6 +61,9 @@ TEST(EventFrameProducer, EveryKthPacketBuiltIsTheFullStreamsFrameThere) {
       const EventFrame& b = all.frames[8 * k];
       ASSERT_EQ(a.t_first, b.t_first) << k;
       ASSERT_EQ(a.t_last, b.t_last) << k;
+      // Each frame says how many were passed over right before it (the tracker's step is that long).
+      EXPECT_EQ(a.passed_before, k == 0 ? 0u : 7u) << k;
+      EXPECT_EQ(b.passed_before, 0u) << k;
       same += cv::norm(a.delta, b.delta, cv::NORM_INF) < 1e-6 ? 1 : 0;
     }
     // The builder's hysteresis memory restarts where a compaction drops events it was never shown.
