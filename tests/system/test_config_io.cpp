@@ -212,7 +212,7 @@ TEST(OdometryConfigIo, DefaultsFollowTheSensorSize) {
   EXPECT_NEAR(vga.event_frame.overlap, 0.6, 1e-12);
   EXPECT_NEAR(vga.events.points.fraction, 0.07, 1e-12);
   EXPECT_EQ(vga.frame_tracker.levels, base.frame_tracker.levels + 1);
-  EXPECT_EQ(vga.backend.points_per_keyframe, 2 * base.backend.points_per_keyframe);
+  EXPECT_EQ(vga.backend.points_per_keyframe, base.backend.points_per_keyframe);
   EXPECT_EQ(small.event_frame.max_rate_hz, 0.0);  // no cap where event rates are a few M/s
   EXPECT_EQ(vga.event_frame.max_rate_hz, 100.0);
   EXPECT_EQ(small.bootstrap.geometric_init.ransac_px, base.bootstrap.geometric_init.ransac_px);
