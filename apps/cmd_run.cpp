@@ -186,8 +186,8 @@ void addRunCommand(CLI::App& app) {
   sized("--overlap", c.event_frame.overlap, "event_frame.overlap",
         "Overlap of consecutive event frames, [0, 1)", "0.5 up to 240x180, 0.6 from 640x480");
   param("--window", c.backend.window, "backend.window", "Keyframes in the back-end window");
-  sized("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
-        "Points each keyframe hosts in the back-end", "300 up to 240x180, 600 from 640x480");
+  param("--points-per-keyframe", c.backend.points_per_keyframe, "backend.points_per_keyframe",
+        "Points each keyframe hosts in the back-end");
   {
     std::map<std::string, WindowRemoval> names;
     for (const auto& [v, name] : enumNames(WindowRemoval{})) names.emplace(name, v);
@@ -224,7 +224,8 @@ void addRunCommand(CLI::App& app) {
        "(live cameras; always on with --realtime)");
   flag("!--no-reversal-compensation", c.event_frame.reversal_compensation,
        "event_frame.reversal_compensation",
-       "Event frames without the events a DVS loses at each brightness turn put back");
+       "Event frames without the events a DVS loses at each brightness turn put back (the default "
+       "from 640x480 on; --set event_frame.reversal_compensation=true puts them back there)");
   flag("--marginalization", c.backend.marginalize, "backend.marginalize",
        "Keep old keyframes' information as a prior (first-estimate Jacobians; off by default)");
   cmd->callback([a] { runRun(*a); });

@@ -215,6 +215,8 @@ TEST(OdometryConfigIo, DefaultsFollowTheSensorSize) {
   EXPECT_EQ(vga.backend.points_per_keyframe, base.backend.points_per_keyframe);
   EXPECT_EQ(small.event_frame.max_rate_hz, 0.0);  // no cap where event rates are a few M/s
   EXPECT_EQ(vga.event_frame.max_rate_hz, 100.0);
+  EXPECT_TRUE(small.event_frame.reversal_compensation);
+  EXPECT_FALSE(vga.event_frame.reversal_compensation);
   EXPECT_EQ(small.bootstrap.geometric_init.ransac_px, base.bootstrap.geometric_init.ransac_px);
   EXPECT_EQ(vga.bootstrap.geometric_init.ransac_px, 2 * base.bootstrap.geometric_init.ransac_px);
   EXPECT_EQ(vga.bootstrap.geometric_init.max_reproj_px, 2 * base.bootstrap.geometric_init.max_reproj_px);
