@@ -196,8 +196,8 @@ TEST(BadFrames, DimmedAndOverexposedFramesMotionBlurKeyframesDeblurred) {
 // one does, so that the events carry the pose against the mapped keyframe (0.038 against 0.028 cm;
 // before, against the keyframe's frame for the 0.4 s of sequence the mapping took: 0.056, 2.0x). Single
 // runs spread over 0.035-0.051 against 0.027-0.033 cm (1.21-1.76x), hence the medians of three. On
-// two busy cores about one run in ten to thirty keyframes at other frames and loses the pose in the
-// blown-out half second (2.3 cm, 7-8 degrees; docs/experiments.md), so the test runs alone (CMake).
+// two busy cores 4 runs in 110 keyframed at other frames and lost the pose in the blown-out half
+// second (2.3 cm, 7-8 degrees; docs/experiments.md), so the test runs alone (CMake).
 TEST(BadFrames, DimmedAndOverexposedFramesSharpThreadedBackend) {
   expectCarriedThrough({.exposure_s = 0.01, .frame_faults = true, .threaded = true}, 1.5, 3);
 }
