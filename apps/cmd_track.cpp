@@ -135,8 +135,8 @@ void addTrackCommand(CLI::App& app) {
          "Lost track when an event frame's cost rises above this multiple of its recent median (0: off)")
       ->capture_default_str();
   cmd->add_flag("!--no-reversal-compensation", a->cfg.event_frame.reversal_compensation,
-                "Event frames without the events a DVS loses at each brightness turn put back (the "
-                "default from 640x480 on)");
+                "Event frames without the events a DVS loses at each brightness turn put back "
+                "(--depth-from-gt; with --reference as eds run has it: off from 640x480 on)");
   cmd->add_option("--compensation-lookahead", a->cfg.event_frame.compensation_lookahead,
                   "Events after each packet searched for its pending turns, in units of N")
       ->capture_default_str();
