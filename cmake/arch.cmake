@@ -1,0 +1,33 @@
+# The instruction set the code is compiled for. The per-pixel and per-point loops are written for the
+# compiler to vectorize; AVX2 and FMA (x86-64-v3, every x86 laptop and server CPU since about 2015)
+# double their vector width over the x86-64 baseline and made whole runs 10-25 % faster
+# (docs/experiments.md). It is not the default yet: the rounding of fused multiply-adds moves some of
+# the README's accuracy figures, which are held by tests to the default build's values.
+# EDS_ARCH: "" (the compiler's default), "auto" (x86-64-v3 where the compiler accepts it and this
+# machine runs it), or any -march value (native, x86-64-v3, ...).
+set(EDS_ARCH "" CACHE STRING "-march for eds: empty for the compiler's default, auto for x86-64-v3 where this machine runs it, or a -march value")
+
+if(EDS_ARCH STREQUAL "auto")
+  set(_eds_arch "")
+  if(CMAKE_SYSTEM_PROCESSOR MATCHES "^(x86_64|AMD64|amd64)$" AND NOT CMAKE_CROSSCOMPILING)
+    include(CheckCXXCompilerFlag)
+    check_cxx_compiler_flag("-march=x86-64-v3" EDS_HAVE_MARCH_V3)
+    if(EDS_HAVE_MARCH_V3)
+      # The flag alone would build a program that stops on an older CPU with an illegal instruction.
+      try_run(EDS_V3_RUN_RESULT EDS_V3_COMPILES SOURCE_FROM_CONTENT cpu_check.cpp
+              "int main() { __builtin_cpu_init(); return __builtin_cpu_supports(\"avx2\") && __builtin_cpu_supports(\"fma\") && __builtin_cpu_supports(\"bmi2\") ? 0 : 1; }")
+      if(EDS_V3_COMPILES AND EDS_V3_RUN_RESULT EQUAL 0)
+        set(_eds_arch "x86-64-v3")
+      endif()
+    endif()
+  endif()
+else()
+  set(_eds_arch "${EDS_ARCH}")
+endif()
+
+if(_eds_arch)
+  add_compile_options("-march=${_eds_arch}")
+  message(STATUS "eds: compiling for -march=${_eds_arch}")
+else()
+  message(STATUS "eds: compiling for the compiler's default instruction set")
+endif()
