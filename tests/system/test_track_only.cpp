@@ -27,7 +27,7 @@ TEST(TrackOnly, EsimWithTrueDepth) {
   EXPECT_TRUE(r.failures.empty());
   EXPECT_EQ(r.tracked, r.event_frames);
   const eval::AteResult a = alignedOnFirstPose(r.trajectory, seq.groundTruth());
-  test::expectAccuracy("ESIM, tracking-only, true depth", a, {0.227, 0.124});
+  test::expectAccuracy("ESIM, tracking-only, true depth", a, {0.227, 0.102});
   EXPECT_GE(a.coverage, 0.95);
 }
 
@@ -40,7 +40,7 @@ TEST(TrackOnly, EsimWithTenPercentDepthNoise) {
   cfg.depth_noise = 0.1;
   const TrackOnlyResult r = runTrackOnly(seq, cfg);
   const eval::AteResult a = alignedOnFirstPose(r.trajectory, seq.groundTruth());
-  test::expectAccuracy("ESIM, tracking-only, 10 % depth noise", a, {1.249, 0.610});
+  test::expectAccuracy("ESIM, tracking-only, 10 % depth noise", a, {1.249, 0.577});
   EXPECT_GE(a.coverage, 0.95);
 }
 
