@@ -33,7 +33,8 @@ const std::filesystem::path& roomSequence() {
 // Checks the event-rate poses as tracked and refined against `live` and `refined` in the deterministic
 // runs; the threaded runs, whose timing decides which keyframe a frame meets, get 2x the refined figure.
 OdometryResult runAndCheck(double frame_rate, test::Measured live, test::Measured refined,
-                           bool threaded = false, bool wait_for_keyframe = true, bool early_reference = true) {
+                           bool threaded = false, bool wait_for_keyframe = true,
+                           bool early_reference = true) {
   const Sequence seq(roomSequence());
   OdometryConfig cfg;
   cfg.frame_rate = frame_rate;
