@@ -165,30 +165,34 @@ struct PairSums {
   }
 };
 
-// One (point, target) residual pair: the Gram matrix of [A, 1, r, ∂r/∂ρ]; its frame part goes to the
-// pair's sums, its point part (the point's column of Hfp, Hpp, bp) straight to the normal equations.
+// One (point, target) residual pair: the Gram matrix of [A, 1] against [A, 1, r, ∂r/∂ρ]; its frame part
+// goes to the pair's sums, its point part (the point's column of Hfp, Hpp, bp) straight to the normal
+// equations. [A, 1] is taken transposed (parameters by pattern pixels) so that every column of the
+// product is one contiguous 8-vector: the compiler vectorizes it without horizontal sums.
 // sh, st: the slots of host and target (< 0: constant frame).
 void addResiduals(const PairJacobian& J, const Eigen::Matrix<double, 8, 1>& r,
                   const Eigen::Matrix<double, 8, 1>& w, int sh, int st, Eigen::Index i, PairSums& ps,
                   NormalEquations& ne) {
-  Eigen::Matrix<double, 8, 10> B;
-  B.leftCols<7>() = J.A;
-  B.col(7).setOnes();
-  B.col(8) = r;
-  B.col(9) = J.d_rho;
-  const Eigen::Matrix<double, 8, 10> WB = w.asDiagonal() * B;
-  const Eigen::Matrix<double, 10, 10> G = B.transpose().lazyProduct(WB);
-  ps.S += G.topLeftCorner<8, 8>();
-  ps.v += G.block<8, 1>(0, 8);
+  Eigen::Matrix<double, 8, 8> At;
+  At.topRows<7>() = J.A.transpose();
+  At.row(7).setOnes();
+  Eigen::Matrix<double, 8, 10> WB;
+  WB.leftCols<7>() = w.asDiagonal() * J.A;
+  WB.col(7) = w;
+  WB.col(8) = w.cwiseProduct(r);
+  WB.col(9) = w.cwiseProduct(J.d_rho);
+  const Eigen::Matrix<double, 8, 10> G = At.lazyProduct(WB);  // [S | v | the point's column]
+  ps.S += G.leftCols<8>();
+  ps.v += G.col(8);
   ps.e = J.e;
   ps.used = true;
   if (sh >= 0) {
     ne.Hfp.col(i).segment<7>(sh * 8) += G.block<7, 1>(0, 9);
     ne.Hfp(sh * 8 + 7, i) += J.e * G(7, 9);
   }
-  if (st >= 0) ne.Hfp.col(i).segment<8>(st * 8) -= G.block<8, 1>(0, 9);
-  ne.Hpp[i] += G(9, 9);
-  ne.bp[i] += G(9, 8);
+  if (st >= 0) ne.Hfp.col(i).segment<8>(st * 8) -= G.col(9);
+  ne.Hpp[i] += J.d_rho.dot(WB.col(9));
+  ne.bp[i] += J.d_rho.dot(WB.col(8));
 }
 
 // A pair's sums into the frame blocks.
