@@ -1,5 +1,6 @@
 #include "eval/ate.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -21,7 +22,29 @@ double rotationAngle(const Mat3& R) {
   return 2.0 * std::atan2(q.vec().norm(), std::abs(q.w()));
 }
 
+// RMS distance of the matched ground-truth positions from their principal axis: the square root of
+// the two smaller eigenvalues of their covariance.
+double offAxisSpread(const Trajectory& gt, const std::vector<MatchedPair>& pairs) {
+  if (pairs.empty()) return 0.0;
+  Vec3 mu = Vec3::Zero();
+  for (const MatchedPair& p : pairs) mu += gt[p.gt].T_w_c.translation();
+  mu /= static_cast<double>(pairs.size());
+  Mat3 C = Mat3::Zero();
+  for (const MatchedPair& p : pairs) {
+    const Vec3 d = gt[p.gt].T_w_c.translation() - mu;
+    C += d * d.transpose();
+  }
+  C /= static_cast<double>(pairs.size());
+  const Vec3 lambda = Eigen::SelfAdjointEigenSolver<Mat3>(C, Eigen::EigenvaluesOnly).eigenvalues();
+  return std::sqrt(std::max(0.0, lambda[0] + lambda[1]));  // ascending: the two smaller
+}
+
 }  // namespace
+
+bool rotationFreeAboutPath(const AteResult& r) {
+  if (r.alignment != Alignment::kSim3 && r.alignment != Alignment::kSe3) return false;
+  return r.trans.rmse > 0.1 * r.path_off_axis_m;
+}
 
 nlohmann::json toJson(const ErrorStats& s) {
   return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},          {"std", s.std},
@@ -157,6 +180,7 @@ AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vec
   r.rot = computeStats(r.rot_errors_deg);
   r.rot_oriented = computeStats(r.rot_oriented_errors_deg);
   r.coverage = computeCoverage(est, gt, r.pairs, cfg.window, cfg.max_coverage_gap);
+  r.path_off_axis_m = offAxisSpread(gt, r.pairs);
   return r;
 }
 
@@ -217,6 +241,8 @@ nlohmann::json toJson(const AteResult& r) {
   j["align_frames"] = r.align_frames;
   j["scale"] = r.transform.s;
   j["segments"] = r.segment_transforms.size();
+  j["path_off_axis_m"] = r.path_off_axis_m;
+  j["alignment_rotation_free"] = rotationFreeAboutPath(r);
   return j;
 }
 

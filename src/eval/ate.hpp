@@ -49,9 +49,20 @@ struct AteResult {
   std::vector<double> rot_oriented_errors_deg;
   ErrorStats rot_oriented;
   double coverage = 0.0;  // fraction of the ground-truth time span covered, in [0, 1]
+  // RMS distance (m) of the matched ground-truth positions from their principal axis. A rotation about
+  // that axis moves them by about this much, so against a larger position error the positions leave it
+  // free: see rotationFreeAboutPath().
+  double path_off_axis_m = 0.0;
   std::vector<std::size_t> segment_starts;
   std::vector<Sim3> segment_transforms;
 };
+
+// Whether the alignment (sim3, se3) fits its rotation about the path's axis to the position errors
+// rather than to the path: the position RMSE exceeds a tenth of path_off_axis_m, so that turning the
+// alignment by a tenth of a radian (6 degrees) about the axis moves the positions by less than their
+// error (on a straight rail it is free up to a half turn). The rotation errors through the alignment
+// (`rot`) then mean little; `rot_oriented` is not affected.
+bool rotationFreeAboutPath(const AteResult& r);
 
 // The estimate in the ground truth's frame, each segment through its own transform.
 Trajectory alignedEstimate(const Trajectory& est, const AteResult& r);
@@ -85,8 +96,8 @@ AteResult evaluateAteFiles(const std::filesystem::path& gt_file, const std::file
                            const EvalConfig& cfg);
 
 // JSON with trans.{rmse,mean,median,std,min,max,num_samples} (m), rot.{...} (deg), rot_oriented.{...}
-// (deg), matched_pairs,
-// coverage, alignment, align_frames and scale.
+// (deg), matched_pairs, coverage, alignment, align_frames, scale, segments, path_off_axis_m and
+// alignment_rotation_free.
 nlohmann::json toJson(const AteResult& r);
 void writeJson(const std::filesystem::path& file, const AteResult& r);
 void writeJson(const std::filesystem::path& file, const nlohmann::json& j);

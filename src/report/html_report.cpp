@@ -86,13 +86,16 @@ std::string summarySection(const RunData& run) {
 std::string accuracyTables(const std::vector<std::pair<std::string, const TrajectoryEval*>>& evals) {
   std::string t =
       "<table><tr><th>trajectory</th><th>poses</th><th>matched</th><th>ATE RMSE (cm)</th><th>ATE median "
-      "(cm)</th><th>rotation RMSE (deg)</th><th>coverage</th><th>sim3 scale</th></tr>";
+      "(cm)</th><th>rotation RMSE (deg)</th><th>rotation RMSE, orientations aligned "
+      "(deg)</th><th>coverage</th>"
+      "<th>sim3 scale</th></tr>";
   for (const auto& [name, e] : evals)
     t += "<tr><td>" + escapeXml(name) + "</td><td>" + std::to_string(e->est.size()) + "</td><td>" +
          std::to_string(e->ate.pairs.size()) + "</td><td>" + fmt("%.3f", 100 * e->ate.trans.rmse) +
          "</td><td>" + fmt("%.3f", 100 * e->ate.trans.median) + "</td><td>" + fmt("%.3f", e->ate.rot.rmse) +
-         "</td><td>" + fmt("%.1f %%", 100 * e->ate.coverage) + "</td><td>" + fmt("%.4f", e->ate.transform.s) +
-         "</td></tr>";
+         (eval::rotationFreeAboutPath(e->ate) ? " (straight path: free)" : "") + "</td><td>" +
+         fmt("%.3f", e->ate.rot_oriented.rmse) + "</td><td>" + fmt("%.1f %%", 100 * e->ate.coverage) +
+         "</td><td>" + fmt("%.4f", e->ate.transform.s) + "</td></tr>";
   t += "</table><table><tr><th>relative error</th><th>length (m)</th><th>pairs</th><th>translation RMSE "
        "(%)</th><th>rotation RMSE (deg)</th></tr>";
   for (const auto& [name, e] : evals)
@@ -242,8 +245,8 @@ std::string compareReport(const ReportInputs& in) {
     evals.push_back(in.gt ? evaluateRun(r, *in.gt) : std::vector<TrajectoryEval>{});
   const bool any = std::any_of(evals.begin(), evals.end(), [](const auto& e) { return !e.empty(); });
   page += "<h2>Runs</h2>" + gtNote(in, any) +
-          "<table><tr><th>run</th><th>trajectory</th><th>poses</th><th>ATE RMSE (cm)</th><th>rotation RMSE "
-          "(deg)</th><th>coverage</th><th>real-time factor</th><th>failures</th></tr>";
+          "<table><tr><th>run</th><th>trajectory</th><th>poses</th><th>ATE RMSE (cm)</th><th>rotation RMSE, "
+          "orientations aligned (deg)</th><th>coverage</th><th>real-time factor</th><th>failures</th></tr>";
   std::vector<PathToDraw> paths;
   std::vector<ErrorsToDraw> errs;
   if (any) paths.push_back({"ground truth", kGtColour, clipTo(*in.gt, primary(in.runs.front())), true});
@@ -253,7 +256,7 @@ std::string compareReport(const ReportInputs& in) {
     page += "<tr><td>" + escapeXml(r.name) + "</td><td>" + (e ? e->label : std::string("-")) + "</td><td>" +
             std::to_string(primary(r).size()) + "</td><td>" +
             (e ? fmt("%.3f", 100 * e->ate.trans.rmse) : "-") + "</td><td>" +
-            (e ? fmt("%.3f", e->ate.rot.rmse) : "-") + "</td><td>" +
+            (e ? fmt("%.3f", e->ate.rot_oriented.rmse) : "-") + "</td><td>" +
             (e ? fmt("%.1f %%", 100 * e->ate.coverage) : "-") + "</td><td>" +
             (r.is_run ? fmt("%.2f", num(r.summary, "real_time_factor")) : "-") + "</td><td>" +
             (r.is_run ? std::to_string(r.summary.value("failures", nlohmann::json::array()).size()) : "-") +
