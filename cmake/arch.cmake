@@ -24,8 +24,11 @@ else()
   set(_eds_arch "${EDS_ARCH}")
 endif()
 
+# EDS_ARCH_FLAGS: for every target here, and public on the library (src/CMakeLists.txt).
+set(EDS_ARCH_FLAGS "")
 if(_eds_arch)
-  add_compile_options("-march=${_eds_arch}")
+  set(EDS_ARCH_FLAGS "-march=${_eds_arch}")
+  add_compile_options(${EDS_ARCH_FLAGS})
   message(STATUS "eds: compiling for -march=${_eds_arch}")
 else()
   message(STATUS "eds: compiling for the compiler's default instruction set")
