@@ -1,5 +1,6 @@
 #include "core/image_sampling.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 
@@ -28,31 +29,25 @@ double sampleBicubic(const cv::Mat& img, double x, double y, double* dx, double*
   double wx[4], dwx[4], wy[4], dwy[4];
   cubicWeights(x - fx, wx, dwx);
   cubicWeights(y - fy, wy, dwy);
-  // Away from the border (nearly every call) the 4x4 taps are read without clamping; the sums are the
-  // same either way.
+  // The four rows are combined first (weights in y), each row as four doubles: one AVX register where
+  // the build has it; then the weights in x. Away from the border (nearly every call) the rows are read
+  // without clamping.
   const bool interior = x0 >= 1 && y0 >= 1 && x0 + 2 < W && y0 + 2 < H;
-  float taps[4][4];
+  Eigen::Array4d col_v = Eigen::Array4d::Zero(), col_d = Eigen::Array4d::Zero();
   for (int j = 0; j < 4; ++j) {
+    Eigen::Array4f row;
     if (interior) {
-      const float* row = img.ptr<float>(y0 - 1 + j) + (x0 - 1);
-      for (int i = 0; i < 4; ++i) taps[j][i] = row[i];
+      row = Eigen::Map<const Eigen::Array4f>(img.ptr<float>(y0 - 1 + j) + (x0 - 1));
     } else {
-      const float* row = img.ptr<float>(std::clamp(y0 - 1 + j, 0, H - 1));
-      for (int i = 0; i < 4; ++i) taps[j][i] = row[std::clamp(x0 - 1 + i, 0, W - 1)];
+      const float* r = img.ptr<float>(std::clamp(y0 - 1 + j, 0, H - 1));
+      for (int i = 0; i < 4; ++i) row[i] = r[std::clamp(x0 - 1 + i, 0, W - 1)];
     }
+    const Eigen::Array4d p = row.cast<double>();
+    col_v += wy[j] * p;
+    col_d += dwy[j] * p;
   }
-  double val = 0, gx = 0, gy = 0;
-  for (int j = 0; j < 4; ++j) {
-    double rv = 0, rd = 0;
-    for (int i = 0; i < 4; ++i) {
-      const double p = taps[j][i];
-      rv += wx[i] * p;
-      rd += dwx[i] * p;
-    }
-    val += wy[j] * rv;
-    gx += wy[j] * rd;
-    gy += dwy[j] * rv;
-  }
+  const Eigen::Map<const Eigen::Array4d> Wx(wx), dWx(dwx);
+  const double val = (Wx * col_v).sum(), gx = (dWx * col_v).sum(), gy = (Wx * col_d).sum();
   if (dx) *dx = gx;
   if (dy) *dy = gy;
   return val;
