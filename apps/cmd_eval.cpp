@@ -63,10 +63,11 @@ void printReport(const EvalOptions& o, const eval::AteResult& r, double median_o
   printStatsRow("rotation", r.rot_oriented, 1.0, "deg, orientations aligned");
   if (eval::rotationFreeAboutPath(r))
     std::printf(
-        "note         : the path keeps within %.4f m of a straight line, against a position error of %.4f "
-        "m:\n"
-        "               the alignment's rotation about it follows the errors, so the first rotation row can\n"
-        "               be off by far more than the tracking was (up to a half turn); the second is not\n",
+        "note         : the path lies %.4f m (RMS) off a straight line, against a position error of\n"
+        "               %.4f m:"
+        " the alignment's rotation about that line follows the errors, so the first\n"
+        "               rotation row can be off by far more than the tracking was (up to a half turn);\n"
+        "               the second is not\n",
         r.path_off_axis_m, r.trans.rmse);
 }
 

@@ -1,7 +1,7 @@
 # The instruction set the code is compiled for. The per-pixel and per-point loops are written for the
 # compiler to vectorize; AVX2 and FMA (x86-64-v3, every x86 laptop and server CPU since about 2015)
 # double their vector width over the x86-64 baseline and made whole runs 10-25 % faster
-# (docs/experiments.md). The release preset asks for auto; the sanitizer presets keep the default.
+# (docs/experiments.md). Not the default: one robustness test's figure then sits just past its bound.
 # EDS_ARCH: "" (the compiler's default), "auto" (x86-64-v3 where the compiler accepts it and this
 # machine runs it), or any -march value (native, x86-64-v3, ...).
 set(EDS_ARCH "" CACHE STRING "-march for eds: empty for the compiler's default, auto for x86-64-v3 where this machine runs it, or a -march value")
@@ -24,11 +24,17 @@ else()
   set(_eds_arch "${EDS_ARCH}")
 endif()
 
-# EDS_ARCH_FLAGS: for every target here, and public on the library (src/CMakeLists.txt).
-set(EDS_ARCH_FLAGS "")
+# With AVX Eigen would align its fixed-size types and its heap blocks to 32 bytes (64 with AVX-512),
+# where Debian's Ceres, built for the x86-64 baseline, uses 16: objects passed between the two would
+# differ in layout, and a block allocated on one side and freed on the other corrupts the heap (seen
+# with -march=native). EIGEN_MAX_ALIGN_BYTES=16 keeps the baseline's layout; the vector instructions
+# stay (unaligned loads). It is public on the library (src/CMakeLists.txt), so that a find_package(eds)
+# build shares the layout whatever its own flags.
+set(EDS_ARCH_DEFINITIONS "")
 if(_eds_arch)
-  set(EDS_ARCH_FLAGS "-march=${_eds_arch}")
-  add_compile_options(${EDS_ARCH_FLAGS})
+  set(EDS_ARCH_DEFINITIONS "EIGEN_MAX_ALIGN_BYTES=16")
+  add_compile_options("-march=${_eds_arch}")
+  add_compile_definitions(${EDS_ARCH_DEFINITIONS})
   message(STATUS "eds: compiling for -march=${_eds_arch}")
 else()
   message(STATUS "eds: compiling for the compiler's default instruction set")

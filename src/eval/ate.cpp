@@ -42,7 +42,9 @@ double offAxisSpread(const Trajectory& gt, const std::vector<MatchedPair>& pairs
 }  // namespace
 
 bool rotationFreeAboutPath(const AteResult& r) {
-  if (r.alignment != Alignment::kSim3 && r.alignment != Alignment::kSe3) return false;
+  // An se3 alignment on one pose takes its rotation from that pose's orientation.
+  if ((r.alignment != Alignment::kSim3 && r.alignment != Alignment::kSe3) || r.align_frames == 1)
+    return false;
   return r.trans.rmse > 0.1 * r.path_off_axis_m;
 }
 
@@ -171,8 +173,13 @@ AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vec
     std::vector<MatchedPair> seg;
     for (; i < pairs.size() && pairs[i].est < end; ++i) seg.push_back(pairs[i]);
     if (seg.empty()) continue;
-    if (alignSegment(est, gt, seg, cfg, !segment_starts.empty(), r, r.segment_transforms[k]) && first)
+    if (alignSegment(est, gt, seg, cfg, !segment_starts.empty(), r, r.segment_transforms[k]) && first) {
       r.transform = r.segment_transforms[k], first = false;
+      // The spread of the poses the alignment was fitted to.
+      const std::size_t used =
+          cfg.align_frames == -1 ? seg.size() : std::min<std::size_t>(seg.size(), cfg.align_frames);
+      r.path_off_axis_m = offAxisSpread(gt, std::vector<MatchedPair>(seg.begin(), seg.begin() + used));
+    }
   }
   if (r.pairs.empty())
     throw std::invalid_argument("no map segment of the estimate has enough matched poses to align");
@@ -180,7 +187,6 @@ AteResult evaluateAtePairs(const Trajectory& est, const Trajectory& gt, std::vec
   r.rot = computeStats(r.rot_errors_deg);
   r.rot_oriented = computeStats(r.rot_oriented_errors_deg);
   r.coverage = computeCoverage(est, gt, r.pairs, cfg.window, cfg.max_coverage_gap);
-  r.path_off_axis_m = offAxisSpread(gt, r.pairs);
   return r;
 }
 

@@ -49,7 +49,8 @@ struct AteResult {
   std::vector<double> rot_oriented_errors_deg;
   ErrorStats rot_oriented;
   double coverage = 0.0;  // fraction of the ground-truth time span covered, in [0, 1]
-  // RMS distance (m) of the matched ground-truth positions from their principal axis. A rotation about
+  // RMS distance (m) of the ground-truth positions the (first segment's) alignment was fitted to from
+  // their principal axis. A rotation about
   // that axis moves them by about this much, so against a larger position error the positions leave it
   // free: see rotationFreeAboutPath().
   double path_off_axis_m = 0.0;
@@ -57,7 +58,8 @@ struct AteResult {
   std::vector<Sim3> segment_transforms;
 };
 
-// Whether the alignment (sim3, se3) fits its rotation about the path's axis to the position errors
+// Whether the alignment (sim3, se3 over more than one pose) fits its rotation about the path's axis to
+// the position errors
 // rather than to the path: the position RMSE exceeds a tenth of path_off_axis_m, so that turning the
 // alignment by a tenth of a radian (6 degrees) about the axis moves the positions by less than their
 // error (on a straight rail it is free up to a half turn). The rotation errors through the alignment

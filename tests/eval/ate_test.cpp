@@ -459,8 +459,20 @@ TEST(Ate, AStraightPathSaysTheAlignmentsRotationIsFree) {
               loose.rot.rmse, loose.path_off_axis_m);
   EXPECT_TRUE(rotationFreeAboutPath(loose));
   EXPECT_GT(loose.rot.rmse, 0.5);
-  // Nor is an alignment that takes no rotation from the positions.
+  // Aligned on its first two poses, any path is a straight line: the spread is that of the poses the
+  // alignment used.
+  EvalConfig two;
+  two.align_frames = 2;
+  const AteResult on_two = evaluateAte(withPositionNoise(wobbly, 0.001), wobbly, two);
+  EXPECT_LT(on_two.path_off_axis_m, 1e-9);
+  EXPECT_TRUE(rotationFreeAboutPath(on_two));
+  // Nor is an alignment that takes no rotation from the positions flagged: none, or se3 on one pose
+  // (its rotation is that pose's orientation).
   EvalConfig none;
   none.alignment = Alignment::kNone;
   EXPECT_FALSE(rotationFreeAboutPath(evaluateAte(withPositionNoise(rail, 0.001), rail, none)));
+  EvalConfig first_pose;
+  first_pose.alignment = Alignment::kSe3;
+  first_pose.align_frames = 1;
+  EXPECT_FALSE(rotationFreeAboutPath(evaluateAte(withPositionNoise(rail, 0.001), rail, first_pose)));
 }

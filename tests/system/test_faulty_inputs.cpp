@@ -108,7 +108,7 @@ test::Measured cleanRun(Variant v) {
   OdometryResult r;
   v.frame_faults = v.event_faults = v.covered = false;
   const eval::AteResult a = runDesk(v, r);
-  return {a.trans.rmse * 100, a.rot.rmse};
+  return {a.trans.rmse * 100, a.rot_oriented.rmse};
 }
 
 // Within `ratio` times the clean run's ATE; with frame faults (the issue of frames the events must carry
@@ -119,7 +119,7 @@ void expectWithinCleanBounds(const eval::AteResult& a, test::Measured clean, boo
   if (max_rotation)
     EXPECT_LE(a.rot.max, 1.0);
   else
-    EXPECT_LE(a.rot.rmse, 1.5 * clean.rot_deg);
+    EXPECT_LE(a.rot_oriented.rmse, 1.5 * clean.rot_deg);
   EXPECT_GE(a.coverage, 0.9);
 }
 
