@@ -1,8 +1,8 @@
 # The instruction set the code is compiled for. The per-pixel and per-point loops are written for the
 # compiler to vectorize; AVX2 and FMA (x86-64-v3, every x86 laptop and server CPU since about 2015)
 # double their vector width over the x86-64 baseline and made whole runs 10-25 % faster
-# (docs/experiments.md). Not the default: the lens calibration then aborts inside Debian's statically
-# linked Ceres (built for the baseline; likely its calls ending in our Eigen code of other widths).
+# (docs/experiments.md). The release preset asks for auto; the sanitizer presets keep the compiler's
+# default (no figure depends on them).
 # EDS_ARCH: "" (the compiler's default), "auto" (x86-64-v3 where the compiler accepts it and this
 # machine runs it), or any -march value (native, x86-64-v3, ...).
 set(EDS_ARCH "" CACHE STRING "-march for eds: empty for the compiler's default, auto for x86-64-v3 where this machine runs it, or a -march value")

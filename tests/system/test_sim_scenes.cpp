@@ -77,11 +77,11 @@ void runScene(const std::string& preset, Mode mode, double frame_rate, test::Mea
   EXPECT_GE(a.coverage, 0.9);
 }
 
-TEST(SimScenes, RoomEventsAndFrames) { runScene("room", Mode::kEvents, 0, {0.114, 0.020}); }
-TEST(SimScenes, RoomFramesOnly) { runScene("room", Mode::kFrames, 0, {0.155, 0.019}); }
-TEST(SimScenes, DeskEventsAndFrames) { runScene("desk", Mode::kEvents, 0, {0.051, 0.044}); }
+TEST(SimScenes, RoomEventsAndFrames) { runScene("room", Mode::kEvents, 0, {0.116, 0.019}); }
+TEST(SimScenes, RoomFramesOnly) { runScene("room", Mode::kFrames, 0, {0.158, 0.018}); }
+TEST(SimScenes, DeskEventsAndFrames) { runScene("desk", Mode::kEvents, 0, {0.050, 0.044}); }
 TEST(SimScenes, DeskFramesOnly) { runScene("desk", Mode::kFrames, 0, {0.061, 0.055}); }
-TEST(SimScenes, DeskEventsAndFramesAt5Hz) { runScene("desk", Mode::kEvents, 5, {0.067, 0.053}); }
+TEST(SimScenes, DeskEventsAndFramesAt5Hz) { runScene("desk", Mode::kEvents, 5, {0.066, 0.052}); }
 
 struct FirstSeconds {
   double init_after_s = -1;
