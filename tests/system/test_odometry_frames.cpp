@@ -63,8 +63,9 @@ double rotationDriftDeg(const Trajectory& est, const Trajectory& gt) {
 
 // Real frames with distortion, back-end in the tracking thread (deterministic). Rotation drift over the
 // slide: measured 1.71 deg with DSO's removal rule built for x86-64-v3 (the release preset), and 1.47
-// for the compiler's default (this figure moves with rounding); the bound takes the larger. The slide is where the window's choice of the
-// keyframe to drop shows (DSO's rule keeps a long baseline; dropping the oldest drifted 4.3 deg).
+// for the compiler's default (this figure moves with rounding); the bound takes the larger. The slide is
+// where the window's choice of the keyframe to drop shows (DSO's rule keeps a long baseline; dropping the
+// oldest drifted 4.3 deg).
 TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
   EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
   const Sequence seq(dir);
