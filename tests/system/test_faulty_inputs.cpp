@@ -210,10 +210,10 @@ void expectCarriedThrough(Variant v, double ratio, double blind_cm, int runs = 1
 
 // Over the blown-out half second no frame anchors the event-rate poses, and there the events alone
 // are 3-4x less accurate than the anchored poses elsewhere: a whole-run ratio against the clean run
-// measured mostly those 59 poses (docs/experiments.md). Sharp, compiler's default build: elsewhere
-// 0.032 against 0.028 cm (1.15x), blind 0.087 cm. Blurred: against a blurred keyframe the events stray
-// more there (0.134 cm, elsewhere 0.99x); with the keyframes deblurred with the events of their exposure
-// (estimated, 44 ms, or given) 0.143 cm, elsewhere 1.05x.
+// measured mostly those 59 poses (docs/experiments.md). Sharp: elsewhere 0.033 against 0.028 cm
+// (1.17x), blind 0.090 cm. Blurred: against a blurred keyframe the events stray more there (0.117 cm,
+// elsewhere 1.09x; 0.134 cm built for the compiler's default); with the keyframes deblurred with the
+// events of their exposure (estimated, 44 ms, or given) 0.101 cm, elsewhere 1.07x (0.143 cm).
 TEST(BadFrames, DimmedAndOverexposedFramesSharp) { expectCarriedThrough({0.01, true}, 1.3, 0.14); }
 TEST(BadFrames, DimmedAndOverexposedFramesMotionBlur) { expectCarriedThrough({0.04, true}, 1.3, 0.21); }
 TEST(BadFrames, DimmedAndOverexposedFramesMotionBlurKeyframesDeblurred) {
