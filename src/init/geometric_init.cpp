@@ -23,9 +23,10 @@ GeometricInit::GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg
     : cam_(pinhole), cfg_(cfg) {}
 
 void GeometricInit::reset(const cv::Mat& ref_image) {
-  prev_ = toGray8(ref_image);
+  const cv::Mat ref8 = toGray8(ref_image);
+  cv::buildOpticalFlowPyramid(ref8, prev_pyr_, kWindow, kLevels, true);
   ref_.clear();
-  cv::goodFeaturesToTrack(prev_, ref_, cfg_.max_features, cfg_.quality, cfg_.min_distance);
+  cv::goodFeaturesToTrack(ref8, ref_, cfg_.max_features, cfg_.quality, cfg_.min_distance);
   cur_ = ref_;
   corners_ = ref_.size();
   ids_.resize(ref_.size());
@@ -36,14 +37,18 @@ void GeometricInit::reset(const cv::Mat& ref_image) {
 std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   seen_.emplace_back(corners_, cv::Point2f(nan, nan));
-  if (prev_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
+  if (prev_pyr_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
   const cv::Mat gray = toGray8(image);
   std::vector<cv::Point2f> next, back;
   std::vector<unsigned char> st, st_back;
   std::vector<float> err;
-  const cv::Size win(21, 21);
-  cv::calcOpticalFlowPyrLK(prev_, gray, cur_, next, st, err, win, 3);
-  cv::calcOpticalFlowPyrLK(gray, prev_, next, back, st_back, err, win, 3);
+  const cv::Size win = kWindow;
+  // Each image's pyramid (with its derivatives) built once: it serves both directions of this frame's
+  // check and the next frame's tracking.
+  std::vector<cv::Mat> pyr;
+  cv::buildOpticalFlowPyramid(gray, pyr, win, kLevels, true);
+  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, cur_, next, st, err, win, kLevels);
+  cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, next, back, st_back, err, win, kLevels);
   const std::size_t n_before = cur_.size();
   std::size_t k = 0;
   for (std::size_t i = 0; i < cur_.size(); ++i) {
@@ -59,7 +64,7 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
   ref_.resize(k);
   cur_.resize(k);
   ids_.resize(k);
-  prev_ = gray;
+  prev_pyr_ = std::move(pyr);
   if (static_cast<int>(k) < cfg_.min_tracks) return std::nullopt;
   std::vector<double> flow(k);
   for (std::size_t i = 0; i < k; ++i) flow[i] = cv::norm(cur_[i] - ref_[i]);

@@ -63,7 +63,9 @@ class GeometricInit {
   std::vector<std::optional<SE3>> posesBefore(const std::vector<int>& triangulated,
                                               const std::vector<Vec3>& X_ref) const;
 
-  cv::Mat prev_;
+  static constexpr int kLevels = 3;  // pyramid levels of the corner tracking above the image
+  inline static const cv::Size kWindow{21, 21};
+  std::vector<cv::Mat> prev_pyr_;  // the last image's pyramid
   std::vector<cv::Point2f> ref_, cur_;
   // Each live track's corner index in the reference, and every frame's track positions by that index
   // (NaN once lost): the frames in between get their poses from them once the depths are known.
