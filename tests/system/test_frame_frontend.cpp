@@ -1,13 +1,17 @@
 // The frame front-end's hand-over with a threaded back-end: which reference a frame tracks against while
 // the back-end works on a keyframe. A usable frame takes the keyframe once it is mapped (its
 // preliminary reference); a refused one, after which the events carry the pose alone, waits for the
-// keyframe's bundle adjustment, even when an event frame took up the preliminary reference meanwhile.
+// keyframe's bundle adjustment, even when an event frame took up the preliminary reference meanwhile;
+// the pipeline asks for that wait when the quality check refuses a frame.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
 
+#include "io/sequence.hpp"
 #include "sim_frames.hpp"
 #include "system/frame_frontend.hpp"
+#include "system/odometry_core.hpp"
+#include "test_data.hpp"
 
 namespace eds {
 namespace {
@@ -100,6 +104,37 @@ TEST(FrameFrontend, ARefusedFrameWaitsForTheAdjustmentOfAPreliminaryReferenceTak
   fe.awaitPendingKeyframe(true);
   EXPECT_EQ(fe.referenceId(), id);
   EXPECT_FALSE(fe.referencePreliminary());
+}
+
+// The same through the pipeline: a frame the quality check refuses right after a keyframe (frames alone,
+// threaded back-end) leaves the frame front-end on that keyframe, adjusted, with nothing pending,
+// whether or not the back-end had finished by then.
+TEST(FrameFrontend, ARefusedFrameAfterAKeyframeLeavesTheKeyframeAdjustedInThePipeline) {
+  EDS_REQUIRE_SHARED(dir, "esim_poster6dof_planar");
+  const Sequence seq(dir);
+  OdometryConfig cfg;
+  cfg.use_events = false;
+  cfg.threaded_backend = true;
+  OdometryResult res;
+  StageClock clock(Stage::kInput);
+  OdometryCore core(seq.camera(), cfg, res, clock);
+  const cv::Mat black = cv::Mat::zeros(seq.camera().height, seq.camera().width, CV_8U);
+  int checked = 0;
+  for (std::size_t i = 0; i < seq.frames().size() && checked < 3; ++i) {
+    core.frame(seq.frames()[i].t, seq.loadFrame(i));
+    const FrameFrontend::Pending* kf = core.frontend().pendingKeyframe();
+    if (!kf) continue;
+    const int id = kf->id;
+    const std::size_t rejected = res.frames_rejected;
+    core.frame(seq.frames()[i].t + fromSeconds(0.01), black);
+    ASSERT_EQ(res.frames_rejected, rejected + 1);
+    EXPECT_EQ(core.frontend().pendingKeyframe(), nullptr);
+    EXPECT_EQ(core.frontend().referenceId(), id);
+    EXPECT_FALSE(core.frontend().referencePreliminary());
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3);
+  core.finish();
 }
 
 // The image from a camera moved by `tx` along x before this fronto-parallel texture at depth 2 m: the
