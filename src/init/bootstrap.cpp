@@ -16,7 +16,8 @@ void BootstrapConfig::validate() const {
   if (!(min_parallax_px > 0) || !(min_parallax_px_sparse > 0) || !(sparse_frame_interval_s > 0) ||
       min_points < 1 || min_frames < 1 || min_frames_sparse < 1 || max_frames <= min_frames ||
       !(max_rmse > 0) || !(max_rmse_growth > 1) || !(min_inlier_share > 0 && min_inlier_share <= 1) ||
-      depth_prior_weight < 0 || final_views < 2)
+      !(min_inlier_fraction_sparse >= 0 && min_inlier_fraction_sparse <= 1) || depth_prior_weight < 0 ||
+      final_views < 2)
     throw std::invalid_argument("bootstrap: bad configuration");
 }
 
@@ -212,8 +213,13 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
   if (worse_fit)
     logf(LogLevel::kDebug, "bootstrap: frame %d fits worse than the one before (rmse %.4f, %d inliers)",
          n_after, previous_rmse_, previous_inliers_);
-  if (diverged || exposure_jump || worse_fit || rmse_ > cfg_.max_rmse || inliers < cfg_.min_points ||
-      n_after > cfg_.max_frames) {
+  // Between frames far apart a constant-depth fit that keeps few of the points as inliers explained a 3D
+  // scene with a wrong pose (rooms at 2 FPS: a third kept, the translation 55-90 deg off).
+  const bool sparse = t - frames_[frames_.size() - 2].t >= fromSeconds(cfg_.sparse_frame_interval_s);
+  const bool few_inliers_sparse =
+      sparse && inliers < cfg_.min_inlier_fraction_sparse * static_cast<double>(pts.size());
+  if (diverged || exposure_jump || worse_fit || few_inliers_sparse || rmse_ > cfg_.max_rmse ||
+      inliers < cfg_.min_points || n_after > cfg_.max_frames) {
     // The geometric path may still make it from this reference (large motion between sparse frames).
     frames_.pop_back();
     images_.pop_back();
@@ -221,7 +227,6 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     return keepForGeometry(t, image);
   }
   previous_rmse_ = rmse_, previous_inliers_ = inliers;
-  const bool sparse = t - frames_[frames_.size() - 2].t >= fromSeconds(cfg_.sparse_frame_interval_s);
   const double min_parallax = sparse ? cfg_.min_parallax_px_sparse : cfg_.min_parallax_px;
   const int min_frames = sparse ? cfg_.min_frames_sparse : cfg_.min_frames;
   if (n_after < min_frames || parallax_ < min_parallax || geo_state_ == GeoState::kPending) return false;

@@ -56,6 +56,9 @@ struct BootstrapConfig {
   // and the inliers fall where the camera moves much between sparse frames.)
   double max_rmse_growth = 1.5;
   double min_inlier_share = 0.6;
+  // A frame sparse_frame_interval_s or more after the one before whose fit keeps fewer than this
+  // fraction of the reference's points as inliers: restart.
+  double min_inlier_fraction_sparse = 0.4;
   // |a| of the frame's affine brightness (I ≈ e^{-a} I_ref + b) above this: the alignment explained a
   // wrong geometry with a change of exposure (a pure rotation can do that); restart
   double max_log_brightness = 1.0;
@@ -69,8 +72,9 @@ struct BootstrapConfig {
 
 EDS_FIELDS(BootstrapConfig, points, tracker, ba, ba_levels, final_views, depth_prior_weight, min_parallax_px,
            sparse_frame_interval_s, min_parallax_px_sparse, min_points, min_frames, min_frames_sparse,
-           max_frames, max_parallax_step_px, max_rmse, max_rmse_growth, min_inlier_share, max_log_brightness,
-           max_intensity, min_intensity, geometric, geometric_init, fill)
+           max_frames, max_parallax_step_px, max_rmse, max_rmse_growth, min_inlier_share,
+           min_inlier_fraction_sparse, max_log_brightness, max_intensity, min_intensity, geometric,
+           geometric_init, fill)
 
 struct BootstrapFrame {
   TimeNs t = 0;

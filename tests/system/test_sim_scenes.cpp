@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -34,23 +35,32 @@ std::filesystem::path sceneSequence(const std::string& preset, const std::filesy
   return done[preset] = dir;
 }
 
-// The preset along the first seconds of the real shapes_rotation motion from 4 s (turns at 20-50 deg/s,
-// up to 104 deg/s; translation 3-11 cm/s), smoothed as the low-frame-rate test set is (sigma = 40 ms,
-// 10 ms exposure).
-std::filesystem::path turningSequence(const std::string& preset, const std::filesystem::path& traj_file,
-                                      double duration_s) {
-  static std::map<std::pair<std::string, double>, std::filesystem::path> done;
-  if (auto it = done.find({preset, duration_s}); it != done.end()) return it->second;
-  const auto d =
-      test::tempDir("scene_turning_" + preset + "_" + std::to_string(static_cast<int>(duration_s)));
-  const sim::Motion motion{sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.04), 4.0,
+// The preset (scene seed `seed`) along seconds [t_start, t_start + duration_s) of a real motion,
+// smoothed as the low-frame-rate test set is (sigma = 40 ms, 10 ms exposure).
+std::filesystem::path windowSequence(const std::string& preset, const std::filesystem::path& traj_file,
+                                     double t_start, double duration_s, unsigned seed = 1) {
+  using Key = std::tuple<std::string, std::string, double, double, unsigned>;
+  static std::map<Key, std::filesystem::path> done;
+  const Key key{preset, traj_file.stem().string(), t_start, duration_s, seed};
+  if (auto it = done.find(key); it != done.end()) return it->second;
+  const auto d = test::tempDir("scene_" + preset + "_" + traj_file.stem().string() + "_" +
+                               std::to_string(static_cast<int>(t_start)) + "_" +
+                               std::to_string(static_cast<int>(duration_s)) + "_" + std::to_string(seed));
+  const sim::Motion motion{sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.04), t_start,
                                               duration_s, traj_file.string())};
-  sim::Scene scene = sim::makePreset(preset, motion, 1);
+  sim::Scene scene = sim::makePreset(preset, motion, seed);
   scene.loadTextures();
-  sim::SimConfig sc = test::noisySimConfig(1);
+  sim::SimConfig sc = test::noisySimConfig(seed);
   sc.exposure_s = 0.01;
   test::writeSimSequence(d, scene, motion, sc);
-  return done[{preset, duration_s}] = d;
+  return done[key] = d;
+}
+
+// The preset along the first seconds of the real shapes_rotation motion from 4 s (turns at 20-50 deg/s,
+// up to 104 deg/s; translation 3-11 cm/s).
+std::filesystem::path turningSequence(const std::string& preset, const std::filesystem::path& traj_file,
+                                      double duration_s) {
+  return windowSequence(preset, traj_file, 4.0, duration_s);
 }
 
 std::filesystem::path turningRoomSequence(const std::filesystem::path& traj_file, double duration_s) {
@@ -172,6 +182,27 @@ TEST(SimScenes, TurningRoomAtTwoFramesPerSecondInitializes) {
   EXPECT_GE(r.ate.coverage, 0.9);
 }
 
+// Two frames a second along the fast half of the poster motion, in the room (scene seed 3): the corner
+// tracks between the first two frames are too few for the geometric path, and the constant-depth fit of
+// the second frame keeps about a third of the points, with a wrong translation. Taken, the run is lost
+// (measured 26.1 cm, coverage 80.5 %); refused for its few inliers, the bootstrap restarts on that frame
+// and the next pair initializes (0.288 cm, 99.5 %). Goal: ATE <= 1 cm, coverage >= 95 %.
+TEST(SimScenes, RoomAtTwoFramesPerSecondRefusesAFirstFitWithFewInliers) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const Sequence seq(windowSequence("room", traj_file, 8.0, 8.0, 3));
+  OdometryConfig cfg;
+  cfg.frame_rate = 2;
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  const eval::AteResult a = eval::evaluateAte(r.events_refined, seq.groundTruth(), eval::EvalConfig{});
+  std::printf(
+      "[ room, poster 8-16 s, seed 3, 2 Hz ] initialized after %.2f s; ATE %.3f cm, coverage %.1f %%\n",
+      toSeconds(r.init_t - r.first_t), a.trans.rmse * 100, a.coverage * 100);
+  EXPECT_LE(a.trans.rmse * 100, 1.0);
+  EXPECT_GE(a.coverage, 0.95);
+}
+
 // One frame a second while the camera turns back and forth. Frames this far apart may complete the
 // bootstrap one frame after its reference (measured 1.0 s; asking for two frames it took frames up to
 // 3 s, past the goal of 2 s). The event frames buffered meanwhile are tracked between frames a second
@@ -199,6 +230,9 @@ TEST(SimScenes, TurningRoomAtOneFramePerSecondThreadedStartsTheLiveEventsInTheMo
   // The bootstrap waits for the second frame after its reference, as it did when this case was found:
   // done at the first one, the keyframe moves too little for the fault to show.
   cfg.bootstrap.min_frames_sparse = 2;
+  // Nor does it refuse a sparse frame for keeping few inliers: with two frames asked for, the turn takes
+  // most points out of view by the second, and the bootstrap would start too late for this case.
+  cfg.bootstrap.min_inlier_fraction_sparse = 0;
   cfg.duration_s = 4.5;
   const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
