@@ -78,20 +78,23 @@ double Bootstrap::translationParallax(const SE3& T_c_ref) const {
 }
 
 // The geometric path on this frame; true when it initialized.
-bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image) {
+bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image, const SE3* hint) {
   if (geo_state_ == GeoState::kUnavailable) return false;
   // The planar verdict holds for this frame only: a homography also explains a rotation-dominated
   // motion of a scene with depth (a hand-held camera shaking before it translates), and a verdict
   // taken then would let the constant-depth photometric path succeed on a 3D scene.
   geo_state_ = GeoState::kPending;
   const bool sparse = !frames_.empty() && t - frames_.back().t >= fromSeconds(cfg_.sparse_frame_interval_s);
-  const std::optional<GeometricInitResult> g = geo_.add(image, sparse);
+  const std::optional<GeometricInitResult> g = geo_.add(image, sparse, hint);
   if (g && g->planar) geo_state_ = GeoState::kPlanar;
   if (g && logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg",
          frames_.size(), g->planar, g->inliers, g->parallax_deg);
   if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
-  if (!g && geo_.tracks() < cfg_.geometric_init.min_tracks) geo_state_ = GeoState::kUnavailable;
+  // Tracks that only the events' pose kept serve this frame alone: the photometric path does not wait for
+  // them (the next frames' corners, tracked on from there, made weak late starts).
+  if ((!g && geo_.tracks() < cfg_.geometric_init.min_tracks) || geo_.tracksFromEvents())
+    geo_state_ = GeoState::kUnavailable;
   return false;
 }
 
@@ -177,7 +180,7 @@ bool Bootstrap::add(TimeNs t, const cv::Mat& image, const SE3* hint) {
     setReference(t, image);
     return false;
   }
-  if (tryGeometry(t, image)) return true;
+  if (tryGeometry(t, image, hint)) return true;
   if (photometric_failed_) return keepForGeometry(t, image);
   SE3 T_c_ref;
   double alpha = 1, beta = 0;

@@ -108,7 +108,7 @@ class Bootstrap {
 
  private:
   bool setReference(TimeNs t, const cv::Mat& image);
-  bool tryGeometry(TimeNs t, const cv::Mat& image);
+  bool tryGeometry(TimeNs t, const cv::Mat& image, const SE3* hint);
   bool alignToReference(const cv::Mat& image, const SE3* hint, SE3& T_c_ref, double& alpha,
                         double& beta) const;
   BaStats twoFrameBa(const cv::Mat& image, const SE3& T_c_ref, double alpha, double beta,

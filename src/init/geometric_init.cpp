@@ -32,29 +32,71 @@ void GeometricInit::reset(const cv::Mat& ref_image) {
   ids_.resize(ref_.size());
   for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = static_cast<int>(i);
   seen_.clear();
+  from_events_ = false;
 }
 
-std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse) {
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  seen_.emplace_back(corners_, cv::Point2f(nan, nan));
-  if (prev_pyr_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
-  const cv::Mat gray = toGray8(image);
-  std::vector<cv::Point2f> next, back;
+// Tracks the live corners into `pyr` (forward and back), from `predicted` where given; keep[i] says
+// whether track i passed the check. Returns how many did.
+std::size_t GeometricInit::track(const std::vector<cv::Mat>& pyr, cv::Size size,
+                                 const std::vector<cv::Point2f>* predicted, std::vector<cv::Point2f>& next,
+                                 std::vector<unsigned char>& keep) const {
+  std::vector<cv::Point2f> back;
   std::vector<unsigned char> st, st_back;
   std::vector<float> err;
-  const cv::Size win = kWindow;
-  // Each image's pyramid (with its derivatives) built once: it serves both directions of this frame's
-  // check and the next frame's tracking.
-  std::vector<cv::Mat> pyr;
-  cv::buildOpticalFlowPyramid(gray, pyr, win, kLevels, true);
-  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, cur_, next, st, err, win, kLevels);
-  cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, next, back, st_back, err, win, kLevels);
-  const std::size_t n_before = cur_.size();
+  int flags = 0;
+  if (predicted) next = *predicted, back = cur_, flags = cv::OPTFLOW_USE_INITIAL_FLOW;
+  const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, cur_, next, st, err, kWindow, kLevels, term, flags);
+  cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, next, back, st_back, err, kWindow, kLevels, term, flags);
+  keep.assign(cur_.size(), 0);
   std::size_t k = 0;
   for (std::size_t i = 0; i < cur_.size(); ++i) {
     const bool inside =
-        next[i].x >= 0 && next[i].y >= 0 && next[i].x <= gray.cols - 1 && next[i].y <= gray.rows - 1;
-    if (!st[i] || !st_back[i] || !inside || cv::norm(back[i] - cur_[i]) > 0.5) continue;
+        next[i].x >= 0 && next[i].y >= 0 && next[i].x <= size.width - 1 && next[i].y <= size.height - 1;
+    keep[i] = st[i] && st_back[i] && inside && cv::norm(back[i] - cur_[i]) <= 0.5;
+    k += keep[i];
+  }
+  return k;
+}
+
+// Where the corners are under the pose T_c_ref with the reference at unit depth (the scale the events'
+// pose comes in during the bootstrap).
+std::vector<cv::Point2f> GeometricInit::predict(const SE3& T_c_ref) const {
+  std::vector<cv::Point2f> pred(cur_.size());
+  for (std::size_t i = 0; i < cur_.size(); ++i) {
+    const Vec3 q = T_c_ref * cam_.pinholeRay(ref_[i].x, ref_[i].y);
+    pred[i] = q.z() > 1e-6 ? cv::Point2f(static_cast<float>(cam_.fx * q.x() / q.z() + cam_.cx),
+                                         static_cast<float>(cam_.fy * q.y() / q.z() + cam_.cy))
+                           : cur_[i];
+  }
+  return pred;
+}
+
+// Tracks the corners into the next image and drops the lost ones; true when enough are left and they
+// moved far enough for a two-view estimate.
+bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint) {
+  const cv::Mat gray = toGray8(image);
+  // Each image's pyramid (with its derivatives) built once: it serves both directions of this frame's
+  // check and the next frame's tracking.
+  std::vector<cv::Mat> pyr;
+  cv::buildOpticalFlowPyramid(gray, pyr, kWindow, kLevels, true);
+  std::vector<cv::Point2f> next;
+  std::vector<unsigned char> keep;
+  std::size_t k = track(pyr, gray.size(), nullptr, next, keep);
+  if (cfg_.from_events && hint && sparse && static_cast<int>(k) < cfg_.min_tracks) {
+    // Between frames far apart the corners move beyond the window's reach: start them where the events'
+    // pose puts them.
+    std::vector<cv::Point2f> next_h;
+    std::vector<unsigned char> keep_h;
+    const std::vector<cv::Point2f> predicted = predict(*hint);
+    const std::size_t k_h = track(pyr, gray.size(), &predicted, next_h, keep_h);
+    logf(LogLevel::kDebug, "bootstrap: %zu corners tracked, %zu from the events' pose", k, k_h);
+    if (k_h > k) next.swap(next_h), keep.swap(keep_h), from_events_ = true;
+  }
+  const std::size_t n_before = cur_.size();
+  k = 0;
+  for (std::size_t i = 0; i < n_before; ++i) {
+    if (!keep[i]) continue;
     ref_[k] = ref_[i];
     cur_[k] = next[i];
     ids_[k] = ids_[i];
@@ -65,46 +107,74 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
   cur_.resize(k);
   ids_.resize(k);
   prev_pyr_ = std::move(pyr);
-  if (static_cast<int>(k) < cfg_.min_tracks) return std::nullopt;
+  if (static_cast<int>(k) < cfg_.min_tracks) return false;
   std::vector<double> flow(k);
   for (std::size_t i = 0; i < k; ++i) flow[i] = cv::norm(cur_[i] - ref_[i]);
   std::nth_element(flow.begin(), flow.begin() + k / 2, flow.end());
   if (logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug, "bootstrap: %zu of %zu corners tracked, median flow %.1f px", k, n_before,
          flow[k / 2]);
-  if (flow[k / 2] < cfg_.min_flow_px) return std::nullopt;
+  return flow[k / 2] >= cfg_.min_flow_px;
+}
 
+// The two-view motion of the live tracks: the planar verdict, or the essential matrix's pose with its
+// inliers in mask_e (and its rotation and translation as recovered, Re and te). False when neither holds.
+// `hint`: the events' pose, given when the tracks were started from it.
+bool GeometricInit::twoViewMotion(GeometricInitResult& res, const SE3* hint, cv::Mat& mask_e, Mat3& Re,
+                                  Vec3& te) const {
   const cv::Matx33d K(cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1);
-  cv::Mat mask_e, mask_h;
+  cv::Mat mask_h;
   cv::Mat E = cv::findEssentialMat(ref_, cur_, K, cv::RANSAC, 0.999, cfg_.ransac_px, mask_e);
   const cv::Mat Hm = cv::findHomography(ref_, cur_, cv::RANSAC, cfg_.ransac_px, mask_h);
-  GeometricInitResult res;
   if (E.rows != 3 || E.cols != 3) {  // several solutions or none: not this frame
     logf(LogLevel::kDebug, "bootstrap: no single essential matrix");
-    return std::nullopt;
+    return false;
   }
   const int n_e = cv::countNonZero(mask_e), n_h = Hm.empty() ? 0 : cv::countNonZero(mask_h);
   res.planar = n_h >= cfg_.planar_ratio * n_e;
-  if (res.planar) return res;
+  if (res.planar) return true;
   cv::Mat R, t;
   res.inliers = cv::recoverPose(E, ref_, cur_, K, R, t, mask_e);
-  if (res.inliers < cfg_.min_tracks) {
+  const bool retry = res.inliers < cfg_.min_tracks;
+  if (retry) {
     // Most of RANSAC's inliers behind a camera: with a dominant far plane many essential matrices fit
     // the tracks about as well, and RANSAC's first consensus can be one of the wrong ones. MAGSAC++
     // scores every hypothesis by all residuals and refines it, which separates them.
     logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers (RANSAC %d, homography %d)", res.inliers,
          n_e, n_h);
     E = cv::findEssentialMat(ref_, cur_, K, cv::USAC_MAGSAC, 0.999, cfg_.ransac_px, mask_e);
-    if (E.rows != 3 || E.cols != 3) return std::nullopt;
+    if (E.rows != 3 || E.cols != 3) return false;
     res.inliers = cv::recoverPose(E, ref_, cur_, K, R, t, mask_e);
     logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers by MAGSAC++", res.inliers);
-    if (res.inliers < cfg_.min_tracks) return std::nullopt;
+    if (res.inliers < cfg_.min_tracks) return false;
   }
-  Mat3 Re;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) Re(r, c) = R.at<double>(r, c);
-  const Vec3 te(t.at<double>(0), t.at<double>(1), t.at<double>(2));
+  te = Vec3(t.at<double>(0), t.at<double>(1), t.at<double>(2));
   res.T_c_ref = SE3(Quat(Re).normalized(), te);
+  if (retry && hint) {
+    const double cos_dir = hint->translation().normalized().dot(te.normalized());
+    const double dir_deg = std::acos(std::clamp(cos_dir, -1.0, 1.0)) * 180 / M_PI;
+    logf(LogLevel::kDebug, "bootstrap: MAGSAC++'s translation %.1f deg from the events'", dir_deg);
+    if (!(dir_deg <= cfg_.max_events_direction_deg)) return false;
+  }
+  logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers (homography %d)", res.inliers, n_h);
+  return true;
+}
+
+std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse, const SE3* hint) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  seen_.emplace_back(corners_, cv::Point2f(nan, nan));
+  from_events_ = false;
+  if (prev_pyr_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
+  if (!advance(image, sparse, hint)) return std::nullopt;
+  GeometricInitResult res;
+  cv::Mat mask_e;
+  Mat3 Re;
+  Vec3 te;
+  if (!twoViewMotion(res, from_events_ ? hint : nullptr, mask_e, Re, te)) return std::nullopt;
+  if (res.planar) return res;
+  const std::size_t k = cur_.size();
   std::vector<double> angles;
   std::vector<int> triangulated;
   std::vector<Vec3> X_ref;
@@ -130,8 +200,7 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
     const Vec3 X0 = x0 * zs[0], c1 = -(Re.transpose() * te);
     angles.push_back(std::acos(std::clamp(X0.normalized().dot((X0 - c1).normalized()), -1.0, 1.0)));
   }
-  logf(LogLevel::kDebug, "bootstrap: %d essential-matrix inliers (homography %d), %zu triangulated",
-       res.inliers, n_h, res.points.size());
+  logf(LogLevel::kDebug, "bootstrap: %zu of %d inliers triangulated", res.points.size(), res.inliers);
   if (static_cast<int>(res.points.size()) < cfg_.min_tracks) return std::nullopt;
   std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
   res.parallax_deg = angles[angles.size() / 2] * 180.0 / M_PI;

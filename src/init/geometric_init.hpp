@@ -30,10 +30,18 @@ struct GeometricInitConfig {
   // The same for a frame that came long after the one before: waiting a second more for parallax
   // costs more than a slightly narrower baseline.
   double min_parallax_deg_sparse = 1.0;
+  // Corners the optical flow loses between sparse frames are tracked again from where the events' pose
+  // puts them.
+  bool from_events = true;
+  // On such tracks MAGSAC++'s essential matrix (taken when RANSAC's fails the cheirality vote) must move
+  // the camera within this angle of the events' translation direction: that direction is rough (20-40
+  // deg off), but MAGSAC++'s wrong minorities there were 90-150 deg off.
+  double max_events_direction_deg = 60.0;
 };
 
 EDS_FIELDS(GeometricInitConfig, max_features, quality, min_distance, min_flow_px, min_tracks, ransac_px,
-           planar_ratio, max_reproj_px, min_parallax_deg, min_parallax_deg_sparse)
+           planar_ratio, max_reproj_px, min_parallax_deg, min_parallax_deg_sparse, from_events,
+           max_events_direction_deg)
 
 struct GeometricInitResult {
   bool planar = false;
@@ -52,13 +60,22 @@ class GeometricInit {
   // Starts over with a new reference (undistorted, CV_32F in [0, 1]).
   void reset(const cv::Mat& ref_image);
   // Tracks the corners into the next frame; a result once the flow is large enough. `sparse`: the frame
-  // came long after the one before (the sparse parallax bound applies).
-  std::optional<GeometricInitResult> add(const cv::Mat& image, bool sparse = false);
+  // came long after the one before (the sparse parallax bound applies). `hint`: the frame's pose from the
+  // events (T_c_ref, the reference at unit depth), where the corners start if they are lost without it.
+  std::optional<GeometricInitResult> add(const cv::Mat& image, bool sparse = false,
+                                         const SE3* hint = nullptr);
   int tracks() const { return static_cast<int>(cur_.size()); }
+  // Whether the last frame's tracks are those started from the events' pose.
+  bool tracksFromEvents() const { return from_events_; }
 
  private:
   CameraModel cam_;
   GeometricInitConfig cfg_;
+  std::size_t track(const std::vector<cv::Mat>& pyr, cv::Size size, const std::vector<cv::Point2f>* predicted,
+                    std::vector<cv::Point2f>& next, std::vector<unsigned char>& keep) const;
+  std::vector<cv::Point2f> predict(const SE3& T_c_ref) const;
+  bool advance(const cv::Mat& image, bool sparse, const SE3* hint);
+  bool twoViewMotion(GeometricInitResult& res, const SE3* hint, cv::Mat& mask_e, Mat3& Re, Vec3& te) const;
   // Poses of the frames before the current one, from the triangulated points (indexed like ref_).
   std::vector<std::optional<SE3>> posesBefore(const std::vector<int>& triangulated,
                                               const std::vector<Vec3>& X_ref) const;
@@ -70,6 +87,7 @@ class GeometricInit {
   // Each live track's corner index in the reference, and every frame's track positions by that index
   // (NaN once lost): the frames in between get their poses from them once the depths are known.
   std::size_t corners_ = 0;
+  bool from_events_ = false;
   std::vector<int> ids_;
   std::vector<std::vector<cv::Point2f>> seen_;
 };

@@ -291,6 +291,9 @@ TEST(SimScenes, TurningDeskAtOneFramePerSecondTracksTheTimeLostBackwards) {
   OdometryConfig cfg;
   cfg.frame_rate = 1;
   cfg.threaded_backend = false;
+  // The loss needs the start of corners tracked without the events: from the events' pose the bootstrap
+  // starts geometrically and this desk is not lost (measured: 1.68 cm, 99.7 %).
+  cfg.bootstrap.geometric_init.from_events = false;
   const OdometryResult r = runOdometry(seq, cfg);
   ASSERT_TRUE(r.initialized);
   ASSERT_EQ(r.losses.size(), 1u);
