@@ -243,6 +243,11 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
         if (!delta.allFinite()) break;
         const SE3 T_new = SE3::exp(delta.head<6>()) * T;
         const double a_new = np == 8 ? alpha + delta[6] : alpha, b_new = np == 8 ? beta + delta[7] : beta;
+        // A gain of zero or less has no logarithm (the window's brightness parameter): never stepped to.
+        if (!(a_new > 0)) {
+          lm.rejected();
+          continue;
+        }
         ++res.evaluations;
         if (evaluate(l, img[l], T_new, a_new, b_new, e_new, true) < 6) {
           lm.rejected();
@@ -270,7 +275,8 @@ FrameTrackResult FrameTracker::track(const cv::Mat& frame, SE3& T, double& alpha
   for (int ch = 0; ch < kReductionChunks; ++ch)
     ss += e.ss[ch], res.residuals += static_cast<int>(e.count[ch]);
   res.rmse = res.residuals == 0 ? 1e9 : std::sqrt(ss / res.residuals);
-  res.ok = res.residuals >= cfg_.min_residuals && res.rmse <= cfg_.max_rmse && T.translation().allFinite();
+  res.ok = res.residuals >= cfg_.min_residuals && res.rmse <= cfg_.max_rmse && T.translation().allFinite() &&
+           alpha >= cfg_.min_gain;
   return res;
 }
 

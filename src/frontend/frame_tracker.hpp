@@ -27,10 +27,13 @@ struct FrameTrackerConfig {
   // median depth is ~1): at the minimum the steps are ~1e-6, and retrying them with more damping
   // (up to 5 evaluations) changes nothing. 0: off.
   double min_step = 0;
+  // A fit whose gain α ends below this is reported as lost: no exposure change between two frames is
+  // that large, and such a fit matches the frame to a flat or inverted keyframe. Must be > 0.
+  double min_gain = 0.1;
 };
 
 EDS_FIELDS(FrameTrackerConfig, levels, max_iterations, huber, affine, max_rmse, min_residuals, convergence,
-           min_step)
+           min_step, min_gain)
 
 struct FrameTrackResult {
   bool ok = false;

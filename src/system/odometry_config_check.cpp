@@ -26,6 +26,8 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
       !(cfg.bootstrap.tracker.min_step >= 0))
     throw std::invalid_argument(
         "Odometry: frame_cv_min_distance and the frame trackers' min_step must not be negative");
+  if (!(cfg.frame_tracker.min_gain > 0) || !(cfg.bootstrap.tracker.min_gain > 0))
+    throw std::invalid_argument("Odometry: the frame trackers' min_gain must be > 0");
   const RecoveryConfig& r = cfg.recovery;
   const RelocalizerConfig& rl = r.relocalizer;
   if (!(r.gap_s > 0) || r.failed_frames < 1 || !(r.max_refinement > 0) || r.new_map_after_frames < 1 ||

@@ -162,5 +162,22 @@ TEST(FrameTracker, PixelsMarkedNaNAreLeftOut) {
   EXPECT_NEAR(a, 1.6, 0.05);
 }
 
+// A frame with the keyframe's brightness inverted (1 - I): the affine model fits it exactly with a gain
+// of -1, which no exposure makes. Such a fit would hand the window a keyframe whose log-gain is NaN;
+// the gain stays positive and the frame is not aligned.
+TEST(FrameTracker, AFitThatNeedsANegativeGainIsRefused) {
+  const CameraModel cam = camera();
+  FrameTracker ft(cam, {});
+  const cv::Mat img = texture(5, 4.0);
+  ft.setKeyframe(planeKeyframe(img));
+  const cv::Mat inverted = 1.0 - img;
+  SE3 T;
+  double a = 1, b = 0;
+  const FrameTrackResult res = ft.track(inverted, T, a, b);
+  std::printf("[ frame tracker, inverted frame ] ok %d, rmse %.4f, a %.3f, b %.3f\n", res.ok, res.rmse, a, b);
+  EXPECT_FALSE(res.ok);
+  EXPECT_GT(a, 0.0);
+}
+
 }  // namespace
 }  // namespace eds

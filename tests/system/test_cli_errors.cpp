@@ -84,6 +84,8 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
   expectError("run " + esim() + runOut() + " --frame-rate -1", "must not be negative");
   expectError("run " + esim() + runOut() + " --set frame_tracker.min_step=-1e-5",
               "the frame trackers' min_step must not be negative");
+  expectError("run " + esim() + runOut() + " --set bootstrap.tracker.min_gain=0",
+              "the frame trackers' min_gain must be > 0");
   expectError("run " + esim() + runOut() + " --set frame_cv_min_distance=-0.01",
               "frame_cv_min_distance and the frame trackers' min_step must not be negative");
   expectError("run " + esim() + runOut() + " --set buffered_max_mb=0", "buffered_max_mb must be > 0");
