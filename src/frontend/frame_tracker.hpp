@@ -27,8 +27,8 @@ struct FrameTrackerConfig {
   // median depth is ~1): at the minimum the steps are ~1e-6, and retrying them with more damping
   // (up to 5 evaluations) changes nothing. 0: off.
   double min_step = 0;
-  // A fit whose gain α ends below this is reported as lost: no exposure change between two frames is
-  // that large, and such a fit matches the frame to a flat or inverted keyframe. Must be > 0.
+  // A fit whose gain α ends below this is reported as lost: a tenfold darkening leaves little of the
+  // scene, and such fits matched the frame to a flat or inverted keyframe. Must be > 0.
   double min_gain = 0.1;
 };
 

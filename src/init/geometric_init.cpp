@@ -44,6 +44,8 @@ std::size_t GeometricInit::track(const std::vector<cv::Mat>& pyr, cv::Size size,
   std::vector<unsigned char> st, st_back;
   std::vector<float> err;
   int flags = 0;
+  // From a prediction the check tracks back from the corners' previous positions as well: from where
+  // the forward tracking ended it would not reach them either.
   if (predicted) next = *predicted, back = cur_, flags = cv::OPTFLOW_USE_INITIAL_FLOW;
   const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
   cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, cur_, next, st, err, kWindow, kLevels, term, flags);
