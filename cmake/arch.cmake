@@ -1,8 +1,9 @@
 # The instruction set the code is compiled for. The per-pixel and per-point loops are written for the
 # compiler to vectorize; AVX2 and FMA (x86-64-v3, every x86 laptop and server CPU since about 2015)
 # double their vector width over the x86-64 baseline and made whole runs 10-25 % faster
-# (docs/experiments.md). The release preset asks for auto; the sanitizer presets keep the compiler's
-# default (no figure depends on them).
+# (docs/experiments.md); compiled without contracting multiply-adds, they compute what the baseline
+# does, up to the order of vector sums. The release preset asks for auto; the sanitizer presets keep
+# the compiler's default (no figure depends on them).
 # EDS_ARCH: "" (the compiler's default), "auto" (x86-64-v3 where the compiler accepts it and this
 # machine runs it), or any -march value (native, x86-64-v3, ...).
 set(EDS_ARCH "" CACHE STRING "-march for eds: empty for the compiler's default, auto for x86-64-v3 where this machine runs it, or a -march value")
@@ -31,10 +32,15 @@ endif()
 # with -march=native). EIGEN_MAX_ALIGN_BYTES=16 keeps the baseline's layout; the vector instructions
 # stay (unaligned loads). It is public on the library (src/CMakeLists.txt), so that a find_package(eds)
 # build shares the layout whatever its own flags.
+# No fused multiply-adds where the source has a multiply and an add: with them (GCC's default once the
+# instruction set has FMA) every figure moved from the baseline build's, and the real slider's rotation
+# error grew by a fifth over twenty runs. Without them the frames and keyframes come out as the baseline
+# build's bit for bit (the event poses within rounding: wider vector sums), about 3 % slower
+# (docs/experiments.md).
 set(EDS_ARCH_DEFINITIONS "")
 if(_eds_arch)
   set(EDS_ARCH_DEFINITIONS "EIGEN_MAX_ALIGN_BYTES=16")
-  add_compile_options("-march=${_eds_arch}")
+  add_compile_options("-march=${_eds_arch}" "-ffp-contract=off")
   add_compile_definitions(${EDS_ARCH_DEFINITIONS})
   message(STATUS "eds: compiling for -march=${_eds_arch}")
 else()

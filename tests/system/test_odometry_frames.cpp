@@ -49,8 +49,8 @@ TEST(FramesOnly, EsimPlane) {
   const eval::AteResult ar = evaluateTrajectory(r.frames_refined, seq.groundTruth());
   std::printf("[ frames-only esim ] init %.2f s, %zu keyframes\n", toSeconds(r.init_t - r.first_t),
               r.keyframes.size());
-  test::expectAccuracy("ESIM, frames only, as tracked", a, {0.091, 0.057});
-  test::expectAccuracy("ESIM, frames only, refined", ar, {0.059, 0.034});
+  test::expectAccuracy("ESIM, frames only, as tracked", a, {0.096, 0.061});
+  test::expectAccuracy("ESIM, frames only, refined", ar, {0.063, 0.036});
   EXPECT_GE(ar.coverage, 0.95);
 }
 
@@ -62,8 +62,9 @@ double rotationDriftDeg(const Trajectory& est, const Trajectory& gt) {
 }
 
 // Real frames with distortion, back-end in the tracking thread (deterministic). Rotation drift over the
-// slide: measured 1.71 deg with DSO's removal rule built for x86-64-v3 (the release preset), and 1.47
-// for the compiler's default (this figure moves with rounding); the bound takes the larger. The slide is
+// slide: measured 1.47 deg with DSO's removal rule (the release preset and the compiler's default
+// alike), 1.71 when the x86-64-v3 build still fused multiply-adds (this figure moves with rounding); the
+// bound takes the larger. The slide is
 // where the window's choice of the keyframe to drop shows (DSO's rule keeps a long baseline; dropping the
 // oldest drifted 4.3 deg).
 TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
@@ -84,7 +85,7 @@ TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
       "%%, rotation drift %.2f deg (dropping the oldest keyframe: %.2f deg)\n",
       toSeconds(r.init_t - r.first_t), r.keyframes.size(), a.trans.rmse * 100, a.rot.rmse, a.coverage * 100,
       drift, drift_oldest);
-  test::expectAccuracy("ECD slider_depth, frames only, refined", a, {0.394, 0.634});
+  test::expectAccuracy("ECD slider_depth, frames only, refined", a, {0.394, 0.568});
   EXPECT_GE(a.coverage, 0.9);
   EXPECT_LE(drift, 1.5 * 1.71);
   EXPECT_GE(drift_oldest, 3.0);
@@ -141,7 +142,7 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   EXPECT_GE(r.map.size(), 5000u);
   EXPECT_LE(med, 0.02 * depth);
   EXPECT_GE(a.coverage, 0.9);
-  test::expectAccuracy("room 8 s, frames only, no events, as tracked", a, {0.254, 0.065});
+  test::expectAccuracy("room 8 s, frames only, no events, as tracked", a, {0.255, 0.065});
   // The refined trajectory (each pose through its keyframe's final pose): the back-end's later
   // refinement of the keyframes shows mostly in the rotation (here 0.065 -> 0.042 deg with the
   // orientations aligned).
@@ -150,7 +151,7 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   std::printf("[ frames-only room 8 s ] refined: ATE %.3f cm, rot %.3f deg (as tracked: %.3f deg)\n",
               ar.trans.rmse * 100, ar.rot_oriented.rmse, a.rot_oriented.rmse);
   EXPECT_LT(ar.rot_oriented.rmse, 0.9 * a.rot_oriented.rmse);
-  test::expectAccuracy("room 8 s, frames only, no events, refined", ar, {0.172, 0.042});
+  test::expectAccuracy("room 8 s, frames only, no events, refined", ar, {0.174, 0.043});
   // What eds run writes: the map as PLY, read back; the refined trajectory as the main file.
   writeOdometryOutputs(dir / "out", r, cfg);
   EXPECT_EQ(readPly(dir / "out" / "map.ply").xyz.size(), r.map.size());
