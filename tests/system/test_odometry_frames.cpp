@@ -64,9 +64,8 @@ double rotationDriftDeg(const Trajectory& est, const Trajectory& gt) {
 // Real frames with distortion, back-end in the tracking thread (deterministic). Rotation drift over the
 // slide: measured 1.47 deg with DSO's removal rule (the release preset and the compiler's default
 // alike), 1.71 when the x86-64-v3 build still fused multiply-adds (this figure moves with rounding); the
-// bound takes the larger. The slide is
-// where the window's choice of the keyframe to drop shows (DSO's rule keeps a long baseline; dropping the
-// oldest drifted 4.3 deg).
+// bound takes the larger. The slide is where the window's choice of the keyframe to drop shows (DSO's
+// rule keeps a long baseline; dropping the oldest drifted 4.3 deg).
 TEST(FramesOnly, SliderDepthRealFramesWithDistortion) {
   EDS_REQUIRE_SHARED(dir, "ecd_slider_depth");
   const Sequence seq(dir);
@@ -144,7 +143,7 @@ TEST(FramesOnly, RoomMapLiesOnTheTruePlanes) {
   EXPECT_GE(a.coverage, 0.9);
   test::expectAccuracy("room 8 s, frames only, no events, as tracked", a, {0.255, 0.065});
   // The refined trajectory (each pose through its keyframe's final pose): the back-end's later
-  // refinement of the keyframes shows mostly in the rotation (here 0.065 -> 0.042 deg with the
+  // refinement of the keyframes shows mostly in the rotation (here 0.065 -> 0.043 deg with the
   // orientations aligned).
   ASSERT_EQ(r.frames_refined.size(), r.frames.size());
   const eval::AteResult ar = evaluateTrajectory(r.frames_refined, gt);
