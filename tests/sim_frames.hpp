@@ -4,9 +4,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "core/camera.hpp"
+#include "core/se3.hpp"
 #include "sim/event_faults.hpp"
 #include "sim/simulator.hpp"
 #include "sim/writer.hpp"
@@ -19,6 +21,24 @@ inline CameraModel simCamera() {
   c.fx = c.fy = 200;
   c.cx = 119.5, c.cy = 89.5;
   return c;
+}
+
+// The fronto-parallel plane `depth` ahead of the keyframe's camera, seen from T_f_kf: each frame pixel's
+// ray meets the plane in the keyframe's image (bilinear; 0.5 where it falls outside).
+inline cv::Mat renderPlaneView(const cv::Mat& kf_img, const CameraModel& cam, const SE3& T_f_kf,
+                               double depth) {
+  const SE3 T_kf_f = T_f_kf.inverse();
+  cv::Mat mx(kf_img.size(), CV_32F), my(kf_img.size(), CV_32F), frame;
+  for (int y = 0; y < kf_img.rows; ++y)
+    for (int x = 0; x < kf_img.cols; ++x) {
+      const Vec3 ray = T_kf_f.so3() * cam.pinholeRay(x, y);
+      const Vec3& o = T_kf_f.translation();
+      const Vec3 p = o + (depth - o.z()) / ray.z() * ray;
+      mx.at<float>(y, x) = static_cast<float>(cam.fx * p.x() / p.z() + cam.cx);
+      my.at<float>(y, x) = static_cast<float>(cam.fy * p.y() / p.z() + cam.cy);
+    }
+  cv::remap(kf_img, frame, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0.5));
+  return frame;
 }
 
 struct FrameSink : sim::SimSink {
@@ -55,7 +75,8 @@ inline void writeSimSequence(const std::filesystem::path& dir, const sim::Scene&
   sim::EventFaultSink faulty(writer, event_faults, cam.width, cam.height);
   sim::SimSink& sink = event_faults.any() ? static_cast<sim::SimSink&>(faulty) : writer;
   sim::writeEcdCalib(dir / "calib.txt", cam);
-  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(), sim::kGroundTruthRateHz);
+  sim::writeGroundTruth(dir / "groundtruth.txt", motion, motion.start(), motion.end(),
+                        sim::kGroundTruthRateHz);
   sim::Simulator(scene, cam, motion, sc).run(motion.start(), motion.end(), sink);
   writer.finish();
 }

@@ -1,19 +1,22 @@
 #include "system/backward_events.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "system/event_frontend.hpp"
 
 namespace eds {
 
-std::size_t trackEventsBackwards(const std::vector<EventFrame>& buffered, const BackwardPass& pass,
-                                 const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res) {
+BackwardPoses trackBackwards(const std::vector<EventFrame>& buffered, const BackwardPass& pass,
+                             const CameraModel& pinhole, const OdometryConfig& cfg,
+                             std::vector<OdometryFailure>& failures) {
   constexpr int kMaxRejected = 3;
   EventFrontend back(pinhole, cfg.events);
   back.setReference(*pass.ref, pass.T_w_kf);
+  // A start other than the reference's own view (a frame's): the first solve begins there.
+  if (pass.start.t != pass.ref->t) back.restartFrom(pass.start.T_w_c);
   StampedPose last = pass.start;
-  Trajectory poses;
-  std::vector<TimeNs> last_t;
+  BackwardPoses out;
   EventFrame ef;
   int rejected = 0;
   for (auto it = buffered.rbegin(); it != buffered.rend() && rejected < kMaxRejected; ++it) {
@@ -29,22 +32,59 @@ std::size_t trackEventsBackwards(const std::vector<EventFrame>& buffered, const 
               s.so3().angle() > dt * pass.speed_r + cfg.buffered_gate_rotation_deg * M_PI / 180.0))
       why = "faster than the frames around it";
     if (!why.empty()) {
-      res.failures.push_back({ef.t, pass.what + ": " + why});
+      failures.push_back({ef.t, pass.what + ": " + why});
       ++rejected;
       continue;
     }
     rejected = 0;
     last = {ef.t, *T};
-    poses.push_back(last);
-    last_t.push_back(ef.t_last);
+    out.poses.push_back(last);
+    out.last_t.push_back(ef.t_last);
   }
-  res.events_tracked += poses.size();
-  for (std::size_t k = poses.size(); k-- > 0;) {
-    res.events.push_back(poses[k]);
-    res.event_last_t.push_back(last_t[k]);
-    res.event_anchors.push_back({back.referenceId(), back.T_w_kf().inverse() * poses[k].T_w_c});
+  out.kf_id = back.referenceId();
+  out.T_w_kf = back.T_w_kf();
+  return out;
+}
+
+std::size_t trackEventsBackwards(const std::vector<EventFrame>& buffered, const BackwardPass& pass,
+                                 const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res) {
+  const BackwardPoses b = trackBackwards(buffered, pass, pinhole, cfg, res.failures);
+  res.events_tracked += b.poses.size();
+  for (std::size_t k = b.poses.size(); k-- > 0;) {
+    res.events.push_back(b.poses[k]);
+    res.event_last_t.push_back(b.last_t[k]);
+    res.event_anchors.push_back({b.kf_id, b.T_w_kf.inverse() * b.poses[k].T_w_c});
   }
-  return poses.size();
+  return b.poses.size();
+}
+
+std::size_t retrackDriftedEvents(const std::vector<EventFrame>& since, const StampedPose& before,
+                                 const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
+                                 const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res) {
+  const SE3 move = before.T_w_c.inverse() * frame.T_w_c;
+  const double span = std::max(1e-3, toSeconds(frame.t - before.t));
+  const BackwardPass pass{&ref,
+                          T_w_kf,
+                          frame,
+                          before.t + 1,
+                          move.translation().norm() / span,
+                          move.so3().angle() / span,
+                          "event frame tracked again"};
+  // A rejection here leaves the forward pose: no failure to list.
+  std::vector<OdometryFailure> rejected;
+  const BackwardPoses b = trackBackwards(since, pass, pinhole, cfg, rejected);
+  const double gate_r = cfg.buffered_gate_rotation_deg * M_PI / 180.0;
+  std::size_t replaced = 0, i = res.events.size();
+  for (const StampedPose& p : b.poses) {  // newest first, as res.events from the end
+    while (i > 0 && res.events[i - 1].t > p.t) --i;
+    if (i == 0) break;
+    if (res.events[i - 1].t != p.t) continue;
+    const SE3 d = res.events[i - 1].T_w_c.inverse() * p.T_w_c;
+    if (d.translation().norm() <= cfg.buffered_gate_translation && d.so3().angle() <= gate_r) break;
+    res.event_anchors[i - 1] = {b.kf_id, b.T_w_kf.inverse() * p.T_w_c};
+    ++replaced;
+  }
+  return replaced;
 }
 
 }  // namespace eds

@@ -28,7 +28,31 @@ struct BackwardPass {
   std::string what;                 // names the pass in the failures it lists
 };
 
-// Tracks buffered[k] (time order) with t_min <= t < start.t, newest first; appends the accepted poses
+// The accepted poses of a backward pass, newest first, with their event frames' last event times and
+// the reference they were tracked against.
+struct BackwardPoses {
+  Trajectory poses;
+  std::vector<TimeNs> last_t;
+  int kf_id = -1;
+  SE3 T_w_kf;
+};
+
+// Tracks buffered[k] (time order) with t_min <= t < start.t, newest first, from start's pose; lists
+// each rejection in `failures`.
+BackwardPoses trackBackwards(const std::vector<EventFrame>& buffered, const BackwardPass& pass,
+                             const CameraModel& pinhole, const OdometryConfig& cfg,
+                             std::vector<OdometryFailure>& failures);
+
+// A frame whose pose came from its features, away from where the events had taken the camera: the
+// event frames tracked since the frame `before` (`since`, time order) are tracked again backwards from
+// `frame` against `ref`. From the newest back to the first where the two agree within the buffered
+// gate's margins, the refined trajectory takes the new pose (event_anchors); the live poses stay as
+// tracked. Returns how many were replaced.
+std::size_t retrackDriftedEvents(const std::vector<EventFrame>& since, const StampedPose& before,
+                                 const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
+                                 const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res);
+
+// trackBackwards, then appends the accepted poses
 // to `res` in time order (events, event_last_t, event_anchors; they must come after every pose there)
 // and each rejection to its failures. Returns the number of poses added.
 std::size_t trackEventsBackwards(const std::vector<EventFrame>& buffered, const BackwardPass& pass,

@@ -122,6 +122,7 @@ SE3 FrameFrontend::track(TimeNs t, const cv::Mat& img, const SE3* prior) {
   }
   res_.track_ms.push_back(msSince(t0));
   last_ok_ = tr.ok;
+  res_.feature_starts += from_features_;
   if (tr.ok) {
     ++res_.tracked;
   } else {
@@ -279,6 +280,7 @@ bool FrameFrontend::keyframeDueBeforeNextFrame(const SE3& T_f_kf) const {
 // prediction, trying DSO's other starting points when that fails.
 FrameTrackResult FrameFrontend::align(TimeNs t, const cv::Mat& img, const SE3* prior, SE3& T_f_kf,
                                       double& alpha, double& beta) {
+  from_features_ = false;
   const SE3 T_w_cv = constantVelocityPose(t);
   const SE3 T_w_pred = prior ? *prior : T_w_cv;
   T_f_kf = T_w_pred.inverse() * T_w_kf_;
@@ -307,8 +309,42 @@ FrameTrackResult FrameFrontend::align(TimeNs t, const cv::Mat& img, const SE3* p
       T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
     }
   }
+  if (has_last_ && cfg_.feature_start.min_interval_s > 0 &&
+      toSeconds(t - last_t_) >= cfg_.feature_start.min_interval_s)
+    alignFromFeatures(t, img, tr, T_f_kf, alpha, beta);
   if (tr.ok) last_rmse_ = tr.rmse, last_residuals_ = tr.residuals;
   return tr;
+}
+
+bool featureAlignmentWins(const FrameTrackResult& features, const FrameTrackResult& best,
+                          double max_rmse_ratio) {
+  if (!features.ok) return false;
+  if (!best.ok) return true;
+  // A pose that sees much less of the reference fits its few points easily: no evidence either.
+  return features.rmse < max_rmse_ratio * best.rmse &&
+         features.residuals >= kFeatureMinResidualShare * best.residuals;
+}
+
+// Frames far apart: the events' pose may have drifted into a wrong minimum that the alignment then
+// keeps, and a constant-velocity start means little after a second. ORB features matched to the
+// reference give a start that owes nothing to either; its alignment replaces the others' only when it
+// fits clearly better, since on a scene seen mostly from afar the features' translation is loose and
+// a slightly lower residual there is no evidence.
+void FrameFrontend::alignFromFeatures(TimeNs t, const cv::Mat& img, FrameTrackResult& tr, SE3& T_f_kf,
+                                      double& alpha, double& beta) {
+  const Relocalization r = eds::relocalize(ref_, img, cam_, cfg_.recovery.relocalizer);
+  if (!r.ok) return;
+  SE3 T_try = r.T_f_kf;
+  double a_try = alpha_, b_try = beta_;
+  const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try, 0);
+  logf(LogLevel::kDebug,
+       "frame %.3f: %d of %d feature matches agree; aligned from them: rmse %.4f over %d residuals (%s), "
+       "against %.4f over %d",
+       toSeconds(t), r.inliers, r.matches, tr2.rmse, tr2.residuals, tr2.ok ? "ok" : "failed", tr.rmse,
+       tr.residuals);
+  if (!featureAlignmentWins(tr2, tr, cfg_.feature_start.max_rmse_ratio)) return;
+  T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
+  from_features_ = true;
 }
 
 }  // namespace eds

@@ -19,6 +19,15 @@ struct Flow {
 };
 Flow flowOf(const std::vector<KeyframePoint>& pts, const SE3& T_f_kf, const CameraModel& cam);
 
+// The alignment from ORB features must keep this share of the other alignment's residuals.
+constexpr double kFeatureMinResidualShare = 0.8;
+
+// Whether a frame's alignment from ORB features replaces the best of the other starts: it converged,
+// and they failed or it fits clearly better (residual RMSE under max_rmse_ratio times theirs) over
+// nearly as many points.
+bool featureAlignmentWins(const FrameTrackResult& features, const FrameTrackResult& best,
+                          double max_rmse_ratio);
+
 class FrameFrontend {
  public:
   // `clock` (may be null): the calling thread's stage clock, passed on to the back-end worker;
@@ -34,6 +43,8 @@ class FrameFrontend {
   // tried first. Adds a keyframe when the policy asks.
   SE3 track(TimeNs t, const cv::Mat& img, const SE3* prior = nullptr);
   bool lastTrackOk() const { return last_ok_; }
+  // The last frame's pose came from the alignment from ORB features (the other starts fitted worse).
+  bool lastFromFeatures() const { return from_features_; }
   // A frame kept out of keyframes and the map (the quality check refused it; the caller has prepared it
   // with normalizeRefusedFrame), aligned from `prior` (the events' pose) or else the constant-velocity
   // prediction, with brightness (α, β) from (1, 0). Its pose when the alignment succeeded on enough
@@ -93,6 +104,8 @@ class FrameFrontend {
   static constexpr double kDeferLimit = 3.0;
   FrameTrackResult align(TimeNs t, const cv::Mat& img, const SE3* prior, SE3& T_f_kf, double& alpha,
                          double& beta);
+  void alignFromFeatures(TimeNs t, const cv::Mat& img, FrameTrackResult& tr, SE3& T_f_kf, double& alpha,
+                         double& beta);
 
   CameraModel cam_;
   const OdometryConfig& cfg_;
@@ -103,7 +116,7 @@ class FrameFrontend {
   int ref_id_ = -1, reference_version_ = 0;
   bool ref_preliminary_ = false;
   double ref_depth_ratio_ = 1.0;  // 90th / 10th percentile of the reference's depths
-  bool has_ref_ = false, last_ok_ = false;
+  bool has_ref_ = false, last_ok_ = false, from_features_ = false;
   SE3 T_w_kf_;
   double a_kf_ = 0, b_kf_ = 0, alpha_ = 1.0, beta_ = 0.0;
   double a_last_ = 0, b_last_ = 0;  // absolute brightness of the last frame

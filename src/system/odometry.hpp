@@ -89,6 +89,16 @@ struct RecoveryConfig {
 EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, relocalizer, new_map_after_frames,
            new_map_after_s, backfill_s)
 
+// Frames at least min_interval_s apart are also aligned from the pose that ORB features matched to
+// the reference give (recovery.relocalizer's settings); that alignment is kept when its residual is
+// below max_rmse_ratio times the other starts' best (or they failed). 0: never.
+struct FeatureStartConfig {
+  double min_interval_s = 0.4;
+  double max_rmse_ratio = 0.8;
+};
+
+EDS_FIELDS(FeatureStartConfig, min_interval_s, max_rmse_ratio)
+
 struct OdometryConfig {
   StreamConfig stream;
   FrameQualityConfig frame_quality;
@@ -110,6 +120,7 @@ struct OdometryConfig {
   // the event-seeded result, radians and map units) to where the first alignment ended: from there it
   // converges to the same minimum (ESIM: 125 of 128 such pairs agreed to 1e-7).
   double frame_cv_min_distance = 0.01;
+  FeatureStartConfig feature_start;
   MappingConfig mapping;
   BackendConfig backend;
   FlowKeyframePolicyConfig policy;
@@ -157,9 +168,9 @@ struct OdometryConfig {
 };
 
 EDS_FIELDS(OdometryConfig, stream, frame_quality, deblur, bootstrap, frame_tracker, prior_levels,
-           frame_always_tries_cv, frame_cv_min_distance, mapping, backend, policy, threaded_backend,
-           wait_for_keyframe, early_reference, use_events, flicker_filter, event_frame, events,
-           buffered_gate_translation, buffered_gate_rotation_deg, buffered_max_mb,
+           frame_always_tries_cv, frame_cv_min_distance, feature_start, mapping, backend, policy,
+           threaded_backend, wait_for_keyframe, early_reference, use_events, flicker_filter, event_frame,
+           events, buffered_gate_translation, buffered_gate_rotation_deg, buffered_max_mb,
            buffered_before_reference_s, event_smoothing_s, event_anchor_max_interval_s,
            event_anchor_max_gap_s, recovery, frame_rate, start_s, duration_s)
 
@@ -233,6 +244,8 @@ struct OdometryResult {
   // Without wait_for_keyframe: keyframes wanted while the back-end was busy, left to a later frame.
   std::size_t keyframes_deferred = 0;
   std::size_t early_references = 0;  // keyframes tracked against before their bundle adjustment
+  std::size_t feature_starts = 0;    // frames whose pose came from the alignment from ORB features
+  std::size_t events_retracked = 0;  // event poses those frames replaced in the refined trajectory
   std::size_t buffered_thinned = 0;  // times the event frames kept during the bootstrap were thinned
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization

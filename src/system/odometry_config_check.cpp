@@ -26,6 +26,10 @@ void validateOdometryConfig(const OdometryConfig& cfg, const CameraModel& camera
       !(cfg.bootstrap.tracker.min_step >= 0))
     throw std::invalid_argument(
         "Odometry: frame_cv_min_distance and the frame trackers' min_step must not be negative");
+  if (!(cfg.feature_start.min_interval_s >= 0) ||
+      !(cfg.feature_start.max_rmse_ratio > 0 && cfg.feature_start.max_rmse_ratio <= 1))
+    throw std::invalid_argument(
+        "Odometry: feature_start.min_interval_s must not be negative and max_rmse_ratio must be in (0, 1]");
   if (!(cfg.frame_tracker.min_gain > 0) || !(cfg.bootstrap.tracker.min_gain > 0))
     throw std::invalid_argument("Odometry: the frame trackers' min_gain must be > 0");
   const RecoveryConfig& r = cfg.recovery;

@@ -142,6 +142,14 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
   const bool prior = has_event_pose_ && std::llabs(t - last_event_.t) < fromSeconds(0.05);
   const SE3 T_w_f = odo_->track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
   if (found && cfg_.use_events) trackEventsSinceLoss(t, odo_->lastTrackOk() ? T_w_f : *found);
+  if (odo_->lastTrackOk()) {
+    if (!found && odo_->lastFromFeatures() && !since_frame_.empty() && last_aligned_.t < t)
+      res_.events_retracked +=
+          retrackDriftedEvents(since_frame_, last_aligned_, {t, T_w_f}, odo_->reference(), odo_->T_w_kf(),
+                               und_.pinhole(), cfg_, res_);
+    since_frame_.clear();
+    last_aligned_ = {t, T_w_f};
+  }
   res_.frames.push_back({t, T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * T_w_f});
   frame_ok_.push_back(odo_->lastTrackOk());
@@ -194,10 +202,12 @@ void OdometryCore::eventFrame(const EventFrame& ef) {
   syncReference();
   const std::size_t n_before = res_.events.size();
   trackEvents(ef, nullptr);
-  if (res_.events.size() == n_before)
+  if (res_.events.size() == n_before) {
     keepForBackfill(ef);
-  else if (!buffered_.empty())
-    buffered_.clear();
+    return;
+  }
+  buffered_.clear();
+  keepSinceFrame(ef);
 }
 
 // An event frame that gave no pose since the last one: kept (those of the last recovery.backfill_s)
@@ -299,6 +309,21 @@ void OdometryCore::trackEventsBeforeReference(const Keyframe& ref, const Traject
                           speed_r,
                           "event frame before the bootstrap's reference"};
   trackEventsBackwards(buffered_, pass, und_.pinhole(), cfg_, res_);
+}
+
+void OdometryCore::keepSinceFrame(const EventFrame& ef) {
+  // Only once the last frame is half a sparse interval old: drift shows late in a long interval, and
+  // at video rate nothing is kept.
+  if (!(cfg_.feature_start.min_interval_s > 0) || last_aligned_.t < 0 ||
+      ef.t - last_aligned_.t < fromSeconds(cfg_.feature_start.min_interval_s) / 2)
+    return;
+  since_frame_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
+  ef.delta.convertTo(since_frame_.back().delta, CV_16F);
+  // Memory bounded as the bootstrap's buffer: every other one dropped beyond buffered_max_mb.
+  const double bytes = static_cast<double>(since_frame_.size() * ef.delta.total() * 2);
+  if (bytes > cfg_.buffered_max_mb * 1e6)
+    for (std::size_t k = since_frame_.size() - 1; k-- > 0;)
+      if (k % 2) since_frame_.erase(since_frame_.begin() + static_cast<std::ptrdiff_t>(k));
 }
 
 // After a relocalization, the event frames kept while the track was lost, tracked backwards from the

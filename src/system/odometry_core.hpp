@@ -59,6 +59,7 @@ class OdometryCore {
   bool recover(TimeNs t, const cv::Mat& img, std::optional<SE3>& found);
   void trackEventsSinceLoss(TimeNs t, const SE3& T_w_f);
   void keepForBackfill(const EventFrame& ef);
+  void keepSinceFrame(const EventFrame& ef);
   void loseTrack(TimeNs t_last_pose, const std::string& cause);
   void startSegment(TimeNs t);
   void retireSegment();
@@ -85,6 +86,10 @@ class OdometryCore {
   int event_ref_version_ = -1;  // of the frame front-end's reference the events took last
   StampedImage sharp_;  // the last keyframe image deblurred for the event tracker (undistorted, float)
   std::vector<EventFrame> buffered_;
+  // The event frames tracked since the last aligned frame, kept while frames come
+  // feature_start.min_interval_s or more apart: tracked again if the next frame shows they drifted.
+  std::vector<EventFrame> since_frame_;
+  StampedPose last_aligned_{-1, SE3()};       // the last frame aligned
   TimeNs buffered_min_dt_ = 0;                // spacing of the buffered event frames once they were thinned
   std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
   TimeNs boot_ref_t_ = -1;

@@ -254,6 +254,8 @@ void writeOdometryOutputs(const std::filesystem::path& dir, const OdometryResult
                  {"backend_waits", r.backend_waits},
                  {"keyframes_deferred", r.keyframes_deferred},
                  {"early_references", r.early_references},
+                 {"feature_starts", r.feature_starts},
+                 {"event_poses_retracked", r.events_retracked},
                  {"bootstrap_event_frames_thinned", r.buffered_thinned}};
   j["deblur"] = {{"exposure_s", r.exposure_s},
                  {"estimated", r.exposure_estimated},

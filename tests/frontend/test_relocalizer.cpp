@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "frontend/relocalizer.hpp"
+#include "sim_frames.hpp"
 
 namespace eds {
 namespace {
@@ -26,22 +27,6 @@ cv::Mat texture(unsigned seed) {
   return img;
 }
 
-// The plane z = 2 m of the keyframe seen from T_f_kf: each frame pixel's ray meets it in the keyframe.
-cv::Mat renderPlane(const cv::Mat& kf_img, const CameraModel& cam, const SE3& T_f_kf) {
-  const SE3 T_kf_f = T_f_kf.inverse();
-  cv::Mat mx(kf_img.size(), CV_32F), my(kf_img.size(), CV_32F), frame;
-  for (int y = 0; y < kf_img.rows; ++y)
-    for (int x = 0; x < kf_img.cols; ++x) {
-      const Vec3 ray = T_kf_f.so3() * cam.pinholeRay(x, y);
-      const Vec3& o = T_kf_f.translation();
-      const Vec3 p = o + (2.0 - o.z()) / ray.z() * ray;
-      mx.at<float>(y, x) = static_cast<float>(cam.fx * p.x() / p.z() + cam.cx);
-      my.at<float>(y, x) = static_cast<float>(cam.fy * p.y() / p.z() + cam.cy);
-    }
-  cv::remap(kf_img, frame, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0.5));
-  return frame;
-}
-
 Keyframe planeKeyframe(const cv::Mat& img) {
   Keyframe kf;
   kf.image = img;
@@ -55,7 +40,8 @@ TEST(Relocalizer, FindsAFrameFarFromItsKeyframe) {
   const cv::Mat img = texture(11);
   // 24 cm and 6 degrees from the keyframe: ~35 px of image motion, far beyond an alignment's basin.
   const SE3 T_f_kf(SO3::exp(Vec3(0.03, -0.08, 0.05)), Vec3(0.24, -0.06, 0.1));
-  const Relocalization r = relocalize(planeKeyframe(img), renderPlane(img, cam, T_f_kf), cam, {});
+  const Relocalization r =
+      relocalize(planeKeyframe(img), test::renderPlaneView(img, cam, T_f_kf, 2.0), cam, {});
   ASSERT_TRUE(r.ok) << r.inliers << " of " << r.matches;
   const double t_err = (r.T_f_kf.translation() - T_f_kf.translation()).norm();
   const double r_err = (r.T_f_kf.so3().inverse() * T_f_kf.so3()).angle() * 180 / M_PI;

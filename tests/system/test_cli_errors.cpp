@@ -88,6 +88,10 @@ TEST_F(CliErrors, ParameterValuesOutOfRange) {
               "the frame trackers' min_gain must be > 0");
   expectError("run " + esim() + runOut() + " --set frame_cv_min_distance=-0.01",
               "frame_cv_min_distance and the frame trackers' min_step must not be negative");
+  expectError("run " + esim() + runOut() + " --set feature_start.max_rmse_ratio=1.5",
+              "max_rmse_ratio must be in (0, 1]");
+  expectError("run " + esim() + runOut() + " --set feature_start.min_interval_s=-1",
+              "feature_start.min_interval_s must not be negative");
   expectError("run " + esim() + runOut() + " --set buffered_max_mb=0", "buffered_max_mb must be > 0");
   expectError("run " + esim() + runOut() + " --set buffered_before_reference_s=-1",
               "buffered_before_reference_s must not be negative");

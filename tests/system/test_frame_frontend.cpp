@@ -205,5 +205,71 @@ TEST(FrameFrontend, TheConstantVelocityPredictionFollowsTheTimeSinceTheLastFrame
   EXPECT_LT(off(fromSeconds(3.0), four), 1e-9);
 }
 
+// Frames a second apart: the events' pose may have drifted into a wrong minimum, and the
+// constant-velocity start means little. The alignment from ORB features matched to the reference
+// finds the frame all the same; frames closer together than feature_start.min_interval_s do not try it.
+struct SparseFrameCase {
+  SE3 T_w_f;  // what the front-end found
+  std::size_t feature_starts = 0;
+};
+
+SparseFrameCase trackFarFrame(double interval_s, double min_interval_s, const SE3& T_w_true) {
+  Harness h;
+  h.cfg.threaded_backend = false;
+  h.cfg.feature_start.min_interval_s = min_interval_s;
+  cv::normalize(h.image, h.image, 0.05, 0.95, cv::NORM_MINMAX);
+  FrameFrontend fe(h.cam, h.cfg, h.res);
+  fe.addKeyframe(0, h.image, SE3(), 0, 0, h.points);
+  fe.awaitPendingKeyframe();
+  fe.setLast(0, SE3());
+  // The events' pose: stuck near the keyframe while the camera went on.
+  const SE3 T_w_events(SO3::exp(Vec3(0.01, -0.02, 0.0)), Vec3(0.03, 0, 0));
+  const cv::Mat frame = test::renderPlaneView(h.image, h.cam, T_w_true.inverse(), 2.0);
+  const SE3 T_w_f = fe.track(fromSeconds(interval_s), frame, &T_w_events);
+  return {T_w_f, h.res.feature_starts};
+}
+
+TEST(FrameFrontend, ASparseFrameFarFromItsStartsIsFoundFromFeatures) {
+  // 30 cm and 9 degrees from the keyframe at 2 m: 60-70 px of image motion.
+  const SE3 T_w_true(SO3::exp(Vec3(0.05, -0.15, 0.06)), Vec3(0.30, -0.08, 0.12));
+  const auto error = [&](const SE3& T_w_f) {
+    const SE3 d = T_w_true.inverse() * T_w_f;
+    return std::pair{d.translation().norm(), d.so3().angle() * 180 / M_PI};
+  };
+  const SparseFrameCase sparse = trackFarFrame(1.0, 0.4, T_w_true);
+  const auto [t_err, r_err] = error(sparse.T_w_f);
+  std::printf("[ sparse frame ] from features: %.2f mm, %.3f deg\n", t_err * 1e3, r_err);
+  EXPECT_EQ(sparse.feature_starts, 1u);
+  EXPECT_LT(t_err, 0.002);
+  EXPECT_LT(r_err, 0.05);
+  // The same frame 0.2 s after the last, or with the feature start off: the other starts miss it.
+  for (const SparseFrameCase& other : {trackFarFrame(0.2, 0.4, T_w_true), trackFarFrame(1.0, 0, T_w_true)}) {
+    EXPECT_EQ(other.feature_starts, 0u);
+    EXPECT_GT(error(other.T_w_f).first, 0.02);
+  }
+}
+
+// Which alignment a sparse frame keeps, with figures from real runs at 1 and 2 frames per second.
+TEST(FrameFrontend, TheFeatureAlignmentWinsOnlyWhenClearlyBetterOverNearlyAsManyPoints) {
+  const auto fit = [](bool ok, double rmse, int residuals) {
+    FrameTrackResult r;
+    r.ok = ok, r.rmse = rmse, r.residuals = residuals;
+    return r;
+  };
+  const double ratio = OdometryConfig{}.feature_start.max_rmse_ratio;
+  // The events had drifted (a desk at 1 FPS): half the residual over more points.
+  EXPECT_TRUE(featureAlignmentWins(fit(true, 0.0152, 7326), fit(true, 0.0317, 6817), ratio));
+  // The same minimum reached from both starts: no reason to move.
+  EXPECT_FALSE(featureAlignmentWins(fit(true, 0.0187, 4378), fit(true, 0.0187, 4378), ratio));
+  // A turning room: 15 % lower on a tenth of the points, where the features' translation is loose.
+  EXPECT_FALSE(featureAlignmentWins(fit(true, 0.0134, 1360), fit(true, 0.0157, 12798), ratio));
+  EXPECT_FALSE(featureAlignmentWins(fit(true, 0.0134, 12000), fit(true, 0.0157, 12798), ratio));
+  EXPECT_FALSE(featureAlignmentWins(fit(true, 0.0100, 1360), fit(true, 0.0157, 12798), ratio));
+  EXPECT_TRUE(featureAlignmentWins(fit(true, 0.0100, 11000), fit(true, 0.0157, 12798), ratio));
+  // The others failed; a failed alignment from the features never wins.
+  EXPECT_TRUE(featureAlignmentWins(fit(true, 0.03, 500), fit(false, 0.02, 5000), ratio));
+  EXPECT_FALSE(featureAlignmentWins(fit(false, 0.01, 5000), fit(true, 0.03, 5000), ratio));
+}
+
 }  // namespace
 }  // namespace eds

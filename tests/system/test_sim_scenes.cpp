@@ -36,22 +36,26 @@ std::filesystem::path sceneSequence(const std::string& preset, const std::filesy
 }
 
 // The preset (scene seed `seed`) along seconds [t_start, t_start + duration_s) of a real motion,
-// smoothed as the low-frame-rate test set is (sigma = 40 ms, 10 ms exposure).
+// smoothed as the low-frame-rate test set is (sigma = 40 ms, 10 ms exposure); `supersample` 2 renders as
+// `eds simulate` does.
 std::filesystem::path windowSequence(const std::string& preset, const std::filesystem::path& traj_file,
-                                     double t_start, double duration_s, unsigned seed = 1) {
-  using Key = std::tuple<std::string, std::string, double, double, unsigned>;
+                                     double t_start, double duration_s, unsigned seed = 1,
+                                     int supersample = 1) {
+  using Key = std::tuple<std::string, std::string, double, double, unsigned, int>;
   static std::map<Key, std::filesystem::path> done;
-  const Key key{preset, traj_file.stem().string(), t_start, duration_s, seed};
+  const Key key{preset, traj_file.stem().string(), t_start, duration_s, seed, supersample};
   if (auto it = done.find(key); it != done.end()) return it->second;
   const auto d = test::tempDir("scene_" + preset + "_" + traj_file.stem().string() + "_" +
                                std::to_string(static_cast<int>(t_start)) + "_" +
-                               std::to_string(static_cast<int>(duration_s)) + "_" + std::to_string(seed));
+                               std::to_string(static_cast<int>(duration_s)) + "_" + std::to_string(seed) +
+                               "_" + std::to_string(supersample));
   const sim::Motion motion{sim::cutTrajectory(sim::smoothTrajectory(readTum(traj_file), 0.04), t_start,
                                               duration_s, traj_file.string())};
   sim::Scene scene = sim::makePreset(preset, motion, seed);
   scene.loadTextures();
   sim::SimConfig sc = test::noisySimConfig(seed);
   sc.exposure_s = 0.01;
+  sc.render.supersample = supersample;
   test::writeSimSequence(d, scene, motion, sc);
   return done[key] = d;
 }
@@ -325,6 +329,31 @@ TEST(SimScenes, TurningDeskAtOneFramePerSecondTracksTheTimeLostBackwards) {
   EXPECT_GE(covered_s, 0.8 * span_s);
   EXPECT_LE(lost_rmse_cm, 1.0);
   EXPECT_LE(a.trans.rmse * 100, 1.0);
+  EXPECT_GE(a.coverage, 0.9);
+}
+
+// A fast hand-held desk at one frame a second (scene seed 4): near 5.85 s the event tracker, on the 5 s
+// keyframe while the camera turns 26 degrees and moves half a metre, slides into a wrong minimum that
+// its correlation does not reveal, and the frame at 6 s aligned from there follows it. Aligned also
+// from ORB features matched to the reference, that frame is found, and the event frames since 5.5 s
+// are tracked again backwards from it (measured: ATE 0.221 cm, coverage 97.0 %; without the features'
+// start 4.09 cm).
+TEST(SimScenes, DeskAtOneFramePerSecondFindsAFrameTheEventsMissedFromFeatures) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const Sequence seq(windowSequence("desk", traj_file, 0.0, 8.0, 4, 2));
+  OdometryConfig cfg;
+  cfg.frame_rate = 1;
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  const eval::AteResult a = eval::evaluateAte(r.events_refined, seq.groundTruth(), eval::EvalConfig{});
+  std::printf(
+      "[ desk seed 4, 8 s, 1 Hz ] %zu frames from features, %zu event poses tracked again; ATE %.3f cm, "
+      "coverage %.1f %%\n",
+      r.feature_starts, r.events_retracked, a.trans.rmse * 100, a.coverage * 100);
+  EXPECT_GE(r.feature_starts, 1u);
+  EXPECT_GT(r.events_retracked, 0u);
+  EXPECT_LE(a.trans.rmse * 100, 0.35);
   EXPECT_GE(a.coverage, 0.9);
 }
 
