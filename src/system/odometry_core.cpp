@@ -409,6 +409,8 @@ void OdometryCore::startSegment(TimeNs t) {
   boot_events_.reset();
   buffered_.clear();
   buffered_min_dt_ = 0;
+  since_frame_.clear();
+  last_aligned_ = {-1, SE3()};
   initialized_ = lost_ = has_boot_event_ = has_event_pose_ = false;
   boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_version_ = -1;
   failed_in_row_ = inputs_without_pose_ = 0;

@@ -75,5 +75,41 @@ TEST(BackwardEvents, EarlierEventFramesTrackedFromALaterPoseAndTheSpeedBoundRefu
   EXPECT_NE(refused.failures[0].reason.find("test pass: faster than"), std::string::npos);
 }
 
+// A frame found by its features shows the events drifted before it: their poses are tracked again
+// backwards from it, and the refined trajectory takes the new ones from the newest back to the first
+// where the two agree; older ones stay as tracked, and so do the live poses.
+TEST(BackwardEvents, PosesTrackedAgainReplaceTheForwardOnesBackToWhereTheyAgree) {
+  const Cases cs = makeCases();
+  const OdometryConfig cfg;
+  const StampedPose before{0, SE3()};  // the keyframe's frame
+  const BackwardPass pass{cs.pass.ref, SE3(), cs.pass.start, before.t + 1, 1.0, 1.0, "again"};
+  std::vector<OdometryFailure> rejected;
+  const BackwardPoses b = trackBackwards(cs.buffered, pass, cs.c.front().cam, cfg, rejected);
+  ASSERT_EQ(b.poses.size(), 3u);
+  // Forward poses: the newest 1 cm off what the backward pass finds, the middle one equal to it, the
+  // oldest 1 cm off again.
+  const SE3 off(SO3(), Vec3(0.01, 0, 0));
+  OdometryResult res;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const SE3 T_back = b.poses[2 - k].T_w_c;  // b.poses is newest first
+    res.events.push_back({cs.buffered[k].t, k == 1 ? T_back : T_back * off});
+    res.event_last_t.push_back(cs.buffered[k].t_last);
+    res.event_anchors.push_back({7, res.events.back().T_w_c});
+  }
+  const OdometryResult forward = res;
+  const std::size_t n = retrackDriftedEvents(cs.buffered, before, cs.pass.start, *cs.pass.ref, SE3(),
+                                             cs.c.front().cam, cfg, res);
+  EXPECT_EQ(n, 1u);
+  EXPECT_EQ(res.event_anchors[2].kf_id, b.kf_id);
+  EXPECT_LT((res.event_anchors[2].T_kf_c.inverse() * b.poses[0].T_w_c).log().norm(), 1e-9);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(res.event_anchors[k].kf_id, 7);
+    EXPECT_LT((res.event_anchors[k].T_kf_c.inverse() * forward.event_anchors[k].T_kf_c).log().norm(), 1e-12);
+  }
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_LT((res.events[k].T_w_c.inverse() * forward.events[k].T_w_c).log().norm(), 1e-12);
+  EXPECT_TRUE(res.failures.empty());
+}
+
 }  // namespace
 }  // namespace eds
