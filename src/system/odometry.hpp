@@ -91,7 +91,8 @@ EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, reloca
 
 // Frames at least min_interval_s apart are also aligned from the pose that ORB features matched to
 // the reference give (recovery.relocalizer's settings); that alignment is kept when its residual is
-// below max_rmse_ratio times the other starts' best (or they failed). 0: never.
+// below max_rmse_ratio times the other starts' best over nearly as many points (or they failed), and
+// the event poses since the frame before are then tracked again from it. 0: never.
 struct FeatureStartConfig {
   double min_interval_s = 0.4;
   double max_rmse_ratio = 0.8;
