@@ -1,11 +1,17 @@
 #include "system/backward_events.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 #include "system/event_frontend.hpp"
 
 namespace eds {
+
+std::pair<double, double> meanSpeed(const StampedPose& a, const StampedPose& b) {
+  if (b.t <= a.t) return {0.0, 0.0};
+  const SE3 move = a.T_w_c.inverse() * b.T_w_c;
+  const double span = toSeconds(b.t - a.t);
+  return {move.translation().norm() / span, move.so3().angle() / span};
+}
 
 BackwardPoses trackBackwards(const std::vector<EventFrame>& buffered, const BackwardPass& pass,
                              const CameraModel& pinhole, const OdometryConfig& cfg,
@@ -61,15 +67,8 @@ std::size_t trackEventsBackwards(const std::vector<EventFrame>& buffered, const 
 std::size_t retrackDriftedEvents(const std::vector<EventFrame>& since, const StampedPose& before,
                                  const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
                                  const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res) {
-  const SE3 move = before.T_w_c.inverse() * frame.T_w_c;
-  const double span = std::max(1e-3, toSeconds(frame.t - before.t));
-  const BackwardPass pass{&ref,
-                          T_w_kf,
-                          frame,
-                          before.t + 1,
-                          move.translation().norm() / span,
-                          move.so3().angle() / span,
-                          "event frame tracked again"};
+  const auto [speed_t, speed_r] = meanSpeed(before, frame);
+  const BackwardPass pass{&ref, T_w_kf, frame, before.t + 1, speed_t, speed_r, "event frame tracked again"};
   // A rejection here leaves the forward pose: no failure to list.
   std::vector<OdometryFailure> rejected;
   const BackwardPoses b = trackBackwards(since, pass, pinhole, cfg, rejected);

@@ -5,6 +5,7 @@
 // it moves from the last accepted one at most kMaxSpeedup times as fast as the camera moved on average
 // around them; the pass ends after a few rejections in a row.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/camera.hpp"
@@ -27,6 +28,9 @@ struct BackwardPass {
   double speed_t = 0, speed_r = 0;  // the camera's mean speed around them: m/s, rad/s
   std::string what;                 // names the pass in the failures it lists
 };
+
+// Translation (m/s) and rotation (rad/s) from a to b over their time apart (0 when at the same time).
+std::pair<double, double> meanSpeed(const StampedPose& a, const StampedPose& b);
 
 // The accepted poses of a backward pass, newest first, with their event frames' last event times and
 // the reference they were tracked against.

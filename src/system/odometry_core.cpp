@@ -34,12 +34,23 @@ Trajectory refinedTrajectory(const Trajectory& traj, const std::vector<PoseAncho
   return out;
 }
 
-// Translation (m/s) and rotation (rad/s) from a to b over their time apart (0 when at the same time).
-std::pair<double, double> meanSpeed(const StampedPose& a, const StampedPose& b) {
-  if (b.t <= a.t) return {0.0, 0.0};
-  const SE3 move = a.T_w_c.inverse() * b.T_w_c;
-  const double span = toSeconds(b.t - a.t);
-  return {move.translation().norm() / span, move.so3().angle() / span};
+// Keeps `ef` in half precision (its values have unit norm: 11 bits suffice) unless it comes closer
+// than min_dt after the last one kept. Beyond max_mb the frames are thinned to twice their mean spacing
+// (evenly, so that they still span their time), which becomes min_dt for those to come. True when it
+// thinned.
+bool keepHalfPrecision(std::vector<EventFrame>& kept, TimeNs& min_dt, const EventFrame& ef, double max_mb) {
+  if (!kept.empty() && ef.t - kept.back().t < min_dt) return false;
+  kept.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
+  ef.delta.convertTo(kept.back().delta, CV_16F);
+  const double bytes = static_cast<double>(kept.size()) * static_cast<double>(kept.back().delta.total()) *
+                       static_cast<double>(kept.back().delta.elemSize());
+  if (bytes <= max_mb * 1024 * 1024 || kept.size() < 2) return false;
+  min_dt = 2 * (kept.back().t - kept.front().t) / static_cast<TimeNs>(kept.size() - 1);
+  std::size_t n = 1;
+  for (std::size_t i = 1; i < kept.size(); ++i)
+    if (kept[i].t - kept[n - 1].t >= min_dt) kept[n++] = std::move(kept[i]);
+  kept.resize(n);
+  return true;
 }
 
 }  // namespace
@@ -148,6 +159,7 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
           retrackDriftedEvents(since_frame_, last_aligned_, {t, T_w_f}, odo_->reference(), odo_->T_w_kf(),
                                und_.pinhole(), cfg_, res_);
     since_frame_.clear();
+    since_min_dt_ = 0;
     last_aligned_ = {t, T_w_f};
   }
   res_.frames.push_back({t, T_w_f});
@@ -180,11 +192,7 @@ void OdometryCore::eventFrame(const EventFrame& ef) {
     // span plus that). In half precision:
     // a second of them at 640x480 is 60 MB so (the values have unit norm; 11 bits suffice).
     pruneBuffered(ef.t);
-    if (buffered_.empty() || ef.t - buffered_.back().t >= buffered_min_dt_) {
-      buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
-      ef.delta.convertTo(buffered_.back().delta, CV_16F);
-      thinBuffered();
-    }
+    res_.buffered_thinned += keepHalfPrecision(buffered_, buffered_min_dt_, ef, cfg_.buffered_max_mb);
     if (boot_events_ && boot_events_->hasReference()) {
       if (const std::optional<SE3> T = boot_events_->track(ef, nullptr)) {
         boot_event_ = {ef.t, *T};
@@ -216,11 +224,8 @@ void OdometryCore::keepForBackfill(const EventFrame& ef) {
   const TimeNs t0 = std::max(ef.t - fromSeconds(cfg_.recovery.backfill_s), last_good_t_);
   std::erase_if(buffered_, [t0](const EventFrame& b) { return b.t <= t0; });
   if (buffered_.empty()) buffered_min_dt_ = 0;
-  if (!(cfg_.recovery.backfill_s > 0) || (!buffered_.empty() && ef.t - buffered_.back().t < buffered_min_dt_))
-    return;
-  buffered_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
-  ef.delta.convertTo(buffered_.back().delta, CV_16F);
-  thinBuffered();
+  if (cfg_.recovery.backfill_s > 0)
+    res_.buffered_thinned += keepHalfPrecision(buffered_, buffered_min_dt_, ef, cfg_.buffered_max_mb);
 }
 
 void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
@@ -317,13 +322,7 @@ void OdometryCore::keepSinceFrame(const EventFrame& ef) {
   if (!(cfg_.feature_start.min_interval_s > 0) || last_aligned_.t < 0 ||
       ef.t - last_aligned_.t < fromSeconds(cfg_.feature_start.min_interval_s) / 2)
     return;
-  since_frame_.push_back({ef.t, ef.t_first, ef.t_last, cv::Mat()});
-  ef.delta.convertTo(since_frame_.back().delta, CV_16F);
-  // Memory bounded as the bootstrap's buffer: every other one dropped beyond buffered_max_mb.
-  const double bytes = static_cast<double>(since_frame_.size() * ef.delta.total() * 2);
-  if (bytes > cfg_.buffered_max_mb * 1e6)
-    for (std::size_t k = since_frame_.size() - 1; k-- > 0;)
-      if (k % 2) since_frame_.erase(since_frame_.begin() + static_cast<std::ptrdiff_t>(k));
+  keepHalfPrecision(since_frame_, since_min_dt_, ef, cfg_.buffered_max_mb);
 }
 
 // After a relocalization, the event frames kept while the track was lost, tracked backwards from the
@@ -410,6 +409,7 @@ void OdometryCore::startSegment(TimeNs t) {
   buffered_.clear();
   buffered_min_dt_ = 0;
   since_frame_.clear();
+  since_min_dt_ = 0;
   last_aligned_ = {-1, SE3()};
   initialized_ = lost_ = has_boot_event_ = has_event_pose_ = false;
   boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_version_ = -1;
@@ -476,22 +476,6 @@ void OdometryCore::finish() {
       res_.events_refined = anchorToFrames(res_.events_refined, aligned_frames,
                                            fromSeconds(cfg_.event_anchor_max_gap_s), segmentStartTimes(res_));
   }
-}
-
-void OdometryCore::thinBuffered() {
-  const double bytes = static_cast<double>(buffered_.size()) *
-                       static_cast<double>(buffered_.back().delta.total()) *
-                       static_cast<double>(buffered_.back().delta.elemSize());
-  if (bytes <= cfg_.buffered_max_mb * 1024 * 1024 || buffered_.size() < 2) return;
-  // Twice the mean spacing from now on, for the frames kept and those to come: they stay evenly spread.
-  buffered_min_dt_ =
-      2 * (buffered_.back().t - buffered_.front().t) / static_cast<TimeNs>(buffered_.size() - 1);
-  std::size_t kept = 1;
-  for (std::size_t i = 1; i < buffered_.size(); ++i)
-    if (buffered_[i].t - buffered_[kept - 1].t >= buffered_min_dt_)
-      buffered_[kept++] = std::move(buffered_[i]);
-  buffered_.resize(kept);
-  ++res_.buffered_thinned;
 }
 
 void OdometryCore::pruneBuffered(TimeNs now) {

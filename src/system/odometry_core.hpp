@@ -65,7 +65,6 @@ class OdometryCore {
   void retireSegment();
   void collectRetired();
   void pruneBuffered(TimeNs now);
-  void thinBuffered();  // the buffered event frames thinned when they exceed buffered_max_mb
   void syncBootstrapEvents(TimeNs t);
   void syncReference();
   void trackEvents(const EventFrame& ef, const SE3* prior,
@@ -89,6 +88,7 @@ class OdometryCore {
   // The event frames tracked since the last aligned frame, kept while frames come
   // feature_start.min_interval_s or more apart: tracked again if the next frame shows they drifted.
   std::vector<EventFrame> since_frame_;
+  TimeNs since_min_dt_ = 0;                   // their spacing once they were thinned
   StampedPose last_aligned_{-1, SE3()};       // the last frame aligned
   TimeNs buffered_min_dt_ = 0;                // spacing of the buffered event frames once they were thinned
   std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
