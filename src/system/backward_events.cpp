@@ -1,5 +1,6 @@
 #include "system/backward_events.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "system/event_frontend.hpp"
@@ -46,6 +47,7 @@ BackwardPoses trackBackwards(const std::vector<EventFrame>& buffered, const Back
     last = {ef.t, *T};
     out.poses.push_back(last);
     out.last_t.push_back(ef.t_last);
+    out.correlations.push_back(back.lastCorrelation());
   }
   out.kf_id = back.referenceId();
   out.T_w_kf = back.T_w_kf();
@@ -60,30 +62,38 @@ std::size_t trackEventsBackwards(const std::vector<EventFrame>& buffered, const 
     res.events.push_back(b.poses[k]);
     res.event_last_t.push_back(b.last_t[k]);
     res.event_anchors.push_back({b.kf_id, b.T_w_kf.inverse() * b.poses[k].T_w_c});
+    res.event_correlations.push_back(b.correlations[k]);
   }
   return b.poses.size();
 }
 
-std::size_t retrackDriftedEvents(const std::vector<EventFrame>& since, const StampedPose& before,
-                                 const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
-                                 const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res) {
+std::size_t retrackEvents(const std::vector<EventFrame>& since, const StampedPose& before,
+                          const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
+                          const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res) {
   const auto [speed_t, speed_r] = meanSpeed(before, frame);
   const BackwardPass pass{&ref, T_w_kf, frame, before.t + 1, speed_t, speed_r, "event frame tracked again"};
   // A rejection here leaves the forward pose: no failure to list.
   std::vector<OdometryFailure> rejected;
   const BackwardPoses b = trackBackwards(since, pass, pinhole, cfg, rejected);
   const double gate_r = cfg.buffered_gate_rotation_deg * M_PI / 180.0;
-  std::size_t replaced = 0, i = res.events.size();
-  for (const StampedPose& p : b.poses) {  // newest first, as res.events from the end
+  const double span = toSeconds(frame.t - before.t);
+  std::size_t moved = 0, i = res.events.size();
+  for (std::size_t k = 0; k < b.poses.size(); ++k) {  // newest first, as res.events from the end
+    const StampedPose& p = b.poses[k];
     while (i > 0 && res.events[i - 1].t > p.t) --i;
     if (i == 0) break;
     if (res.events[i - 1].t != p.t) continue;
-    const SE3 d = res.events[i - 1].T_w_c.inverse() * p.T_w_c;
-    if (d.translation().norm() <= cfg.buffered_gate_translation && d.so3().angle() <= gate_r) break;
-    res.event_anchors[i - 1] = {b.kf_id, b.T_w_kf.inverse() * p.T_w_c};
-    ++replaced;
+    const SE3& T_w_fwd = res.events[i - 1].T_w_c;
+    const SE3 d = T_w_fwd.inverse() * p.T_w_c;
+    SE3 T_w_c = p.T_w_c;
+    if (d.translation().norm() <= cfg.buffered_gate_translation && d.so3().angle() <= gate_r)
+      T_w_c = T_w_fwd * SE3::exp(std::clamp(toSeconds(p.t - before.t) / span, 0.0, 1.0) * d.log());
+    else if (b.correlations[k] < res.event_correlations[i - 1] - kRetrackCorrelationMargin)
+      continue;
+    res.event_anchors[i - 1] = {b.kf_id, b.T_w_kf.inverse() * T_w_c};
+    ++moved;
   }
-  return replaced;
+  return moved;
 }
 
 }  // namespace eds

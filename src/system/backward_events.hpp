@@ -20,6 +20,10 @@ namespace eds {
 // second; 6 let more wrong ones through).
 constexpr double kMaxSpeedup = 4.0;
 
+// retrackEvents keeps a forward pose the backward pass disagrees with when the backward one fits its
+// event frame worse by more than this (n̂·n; 0 and 0.02 measured alike, both better than no check).
+constexpr double kRetrackCorrelationMargin = 0.02;
+
 struct BackwardPass {
   const Keyframe* ref = nullptr;  // the keyframe the events track against, at T_w_kf
   SE3 T_w_kf;
@@ -37,6 +41,7 @@ std::pair<double, double> meanSpeed(const StampedPose& a, const StampedPose& b);
 struct BackwardPoses {
   Trajectory poses;
   std::vector<TimeNs> last_t;
+  std::vector<double> correlations;  // the tracker's n̂·n at each pose
   int kf_id = -1;
   SE3 T_w_kf;
 };
@@ -47,14 +52,16 @@ BackwardPoses trackBackwards(const std::vector<EventFrame>& buffered, const Back
                              const CameraModel& pinhole, const OdometryConfig& cfg,
                              std::vector<OdometryFailure>& failures);
 
-// A frame whose pose came from its features, away from where the events had taken the camera: the
-// event frames tracked since the frame `before` (`since`, time order) are tracked again backwards from
-// `frame` against `ref`. From the newest back to the first where the two agree within the buffered
-// gate's margins, the refined trajectory takes the new pose (event_anchors); the live poses stay as
-// tracked. Returns how many were replaced.
-std::size_t retrackDriftedEvents(const std::vector<EventFrame>& since, const StampedPose& before,
-                                 const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
-                                 const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res);
+// A frame aligned after a sparse interval: the event frames tracked since the frame `before`
+// (`since`, time order) are tracked again backwards from `frame` against `ref`, and the refined
+// trajectory (event_anchors) merges the two passes, each trustworthy near the frame it started from:
+// where they agree within the buffered gate's margins, their blend, weighted towards the later frame
+// by the time fraction; where they do not, the backward pose, unless its correlation is lower than the
+// forward one's by more than kRetrackCorrelationMargin. The live poses stay as tracked. Returns how many
+// poses moved.
+std::size_t retrackEvents(const std::vector<EventFrame>& since, const StampedPose& before,
+                          const StampedPose& frame, const Keyframe& ref, const SE3& T_w_kf,
+                          const CameraModel& pinhole, const OdometryConfig& cfg, OdometryResult& res);
 
 // trackBackwards, then appends the accepted poses
 // to `res` in time order (events, event_last_t, event_anchors; they must come after every pose there)

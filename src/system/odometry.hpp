@@ -89,16 +89,19 @@ struct RecoveryConfig {
 EDS_FIELDS(RecoveryConfig, enabled, gap_s, failed_frames, max_refinement, relocalizer, new_map_after_frames,
            new_map_after_s, backfill_s)
 
-// Frames at least min_interval_s apart are also aligned from the pose that ORB features matched to
-// the reference give (recovery.relocalizer's settings); that alignment is kept when its residual is
-// below max_rmse_ratio times the other starts' best over nearly as many points (or they failed), and
-// the event poses since the frame before are then tracked again from it. 0: never.
+// Frames at least min_interval_s apart (0: never) are also aligned from the pose that ORB features
+// matched to the reference give (recovery.relocalizer's settings); that alignment is kept when its
+// residual is below max_rmse_ratio times the other starts' best over nearly as many points (or they
+// failed). With retrack_events, the event poses since the frame before such a frame are tracked again
+// backwards from it, and the refined trajectory merges the two passes (see backward_events.hpp): over a
+// long interval the forward pass can slide along the direction one event frame resolves least.
 struct FeatureStartConfig {
   double min_interval_s = 0.4;
   double max_rmse_ratio = 0.8;
+  bool retrack_events = true;
 };
 
-EDS_FIELDS(FeatureStartConfig, min_interval_s, max_rmse_ratio)
+EDS_FIELDS(FeatureStartConfig, min_interval_s, max_rmse_ratio, retrack_events)
 
 struct OdometryConfig {
   StreamConfig stream;
@@ -222,6 +225,7 @@ struct OdometryResult {
   // composed with the keyframes' final poses, the anchors give the refined trajectories (as DSO
   // writes its frames' poses: through their tracking reference's final pose).
   std::vector<PoseAnchor> frame_anchors, event_anchors;
+  std::vector<double> event_correlations;  // parallel to events: the tracker's n̂·n at each pose
   Trajectory frames_refined, events_refined;
   std::size_t event_frames = 0, events_tracked = 0;  // event frames handed to the tracker, tracked
   std::vector<double> event_track_ms;

@@ -154,13 +154,11 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
   const SE3 T_w_f = odo_->track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
   if (found && cfg_.use_events) trackEventsSinceLoss(t, odo_->lastTrackOk() ? T_w_f : *found);
   if (odo_->lastTrackOk()) {
-    if (!found && odo_->lastFromFeatures() && !since_frame_.empty() && last_aligned_.t < t)
-      res_.events_retracked +=
-          retrackDriftedEvents(since_frame_, last_aligned_, {t, T_w_f}, odo_->reference(), odo_->T_w_kf(),
-                               und_.pinhole(), cfg_, res_);
-    since_frame_.clear();
-    since_min_dt_ = 0;
-    last_aligned_ = {t, T_w_f};
+    const bool sparse = sparseAfter(last_aligned_.t, t);
+    if (!found && sparse && cfg_.feature_start.retrack_events && !since_frame_.empty())
+      res_.events_retracked += retrackEvents(since_frame_, last_aligned_, {t, T_w_f}, odo_->reference(),
+                                             odo_->T_w_kf(), und_.pinhole(), cfg_, res_);
+    sinceFrame({t, T_w_f}, sparse);
   }
   res_.frames.push_back({t, T_w_f});
   res_.frame_anchors.push_back({odo_->referenceId(), odo_->T_w_kf().inverse() * T_w_f});
@@ -264,6 +262,7 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   res_.frame_anchors.push_back({ref_id, T_w_f});
   frame_ok_.push_back(1);
   res_.tracked += boot_traj.size();
+  sinceFrame({t, T_w_f}, sparseAfter(boot_traj[boot_traj.size() - 2].t, t));
   if (!cfg_.use_events) return;
   trackEventsBeforeReference(ref, boot_traj);
   events_->setReference(ref, SE3());
@@ -316,11 +315,23 @@ void OdometryCore::trackEventsBeforeReference(const Keyframe& ref, const Traject
   trackEventsBackwards(buffered_, pass, und_.pinhole(), cfg_, res_);
 }
 
+bool OdometryCore::sparseAfter(TimeNs t_before, TimeNs t) const {
+  return cfg_.feature_start.min_interval_s > 0 && t_before >= 0 &&
+         t - t_before >= fromSeconds(cfg_.feature_start.min_interval_s);
+}
+
+void OdometryCore::sinceFrame(const StampedPose& frame, bool sparse) {
+  since_frame_.clear();
+  since_min_dt_ = 0;
+  last_aligned_ = frame;
+  sparse_frames_ = sparse;
+}
+
 void OdometryCore::keepSinceFrame(const EventFrame& ef) {
-  // Only once the last frame is half a sparse interval old: drift shows late in a long interval, and
-  // at video rate nothing is kept.
+  // While frames come sparsely, from the last one on; else only once it is half a sparse interval
+  // old (frames may have turned sparse): at video rate nothing is kept.
   if (!(cfg_.feature_start.min_interval_s > 0) || last_aligned_.t < 0 ||
-      ef.t - last_aligned_.t < fromSeconds(cfg_.feature_start.min_interval_s) / 2)
+      (!sparse_frames_ && ef.t - last_aligned_.t < fromSeconds(cfg_.feature_start.min_interval_s) / 2))
     return;
   keepHalfPrecision(since_frame_, since_min_dt_, ef, cfg_.buffered_max_mb);
 }
@@ -408,9 +419,7 @@ void OdometryCore::startSegment(TimeNs t) {
   boot_events_.reset();
   buffered_.clear();
   buffered_min_dt_ = 0;
-  since_frame_.clear();
-  since_min_dt_ = 0;
-  last_aligned_ = {-1, SE3()};
+  sinceFrame({-1, SE3()}, false);
   initialized_ = lost_ = has_boot_event_ = has_event_pose_ = false;
   boot_ref_t_ = -1, boot_restarts_ = -1, event_ref_version_ = -1;
   failed_in_row_ = inputs_without_pose_ = 0;
@@ -557,6 +566,7 @@ void OdometryCore::trackEvents(const EventFrame& ef, const SE3* prior,
   res_.events.push_back(last_event_);
   res_.event_last_t.push_back(ef.t_last);
   res_.event_anchors.push_back({events_->referenceId(), events_->T_w_kf().inverse() * *T});
+  res_.event_correlations.push_back(events_->lastCorrelation());
   if (events_->referenceId() != snapshot_ref_id_) snapshot(ef);
 }
 

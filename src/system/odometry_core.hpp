@@ -60,6 +60,8 @@ class OdometryCore {
   void trackEventsSinceLoss(TimeNs t, const SE3& T_w_f);
   void keepForBackfill(const EventFrame& ef);
   void keepSinceFrame(const EventFrame& ef);
+  bool sparseAfter(TimeNs t_before, TimeNs t) const;       // min_interval_s or more apart
+  void sinceFrame(const StampedPose& frame, bool sparse);  // frame: the last aligned from now on
   void loseTrack(TimeNs t_last_pose, const std::string& cause);
   void startSegment(TimeNs t);
   void retireSegment();
@@ -86,10 +88,11 @@ class OdometryCore {
   StampedImage sharp_;  // the last keyframe image deblurred for the event tracker (undistorted, float)
   std::vector<EventFrame> buffered_;
   // The event frames tracked since the last aligned frame, kept while frames come
-  // feature_start.min_interval_s or more apart: tracked again if the next frame shows they drifted.
+  // feature_start.min_interval_s or more apart: tracked again from the next frame.
   std::vector<EventFrame> since_frame_;
   TimeNs since_min_dt_ = 0;                   // their spacing once they were thinned
   StampedPose last_aligned_{-1, SE3()};       // the last frame aligned
+  bool sparse_frames_ = false;                // it came a sparse interval after the one before
   TimeNs buffered_min_dt_ = 0;                // spacing of the buffered event frames once they were thinned
   std::optional<EventFrontend> boot_events_;  // events against the bootstrap's reference
   TimeNs boot_ref_t_ = -1;

@@ -75,10 +75,11 @@ TEST(BackwardEvents, EarlierEventFramesTrackedFromALaterPoseAndTheSpeedBoundRefu
   EXPECT_NE(refused.failures[0].reason.find("test pass: faster than"), std::string::npos);
 }
 
-// A frame found by its features shows the events drifted before it: their poses are tracked again
-// backwards from it, and the refined trajectory takes the new ones from the newest back to the first
-// where the two agree; older ones stay as tracked, and so do the live poses.
-TEST(BackwardEvents, PosesTrackedAgainReplaceTheForwardOnesBackToWhereTheyAgree) {
+// After a sparse interval the event poses since the frame before are tracked again backwards from the
+// new frame, and the refined trajectory merges the passes: a pose the two agree on is their blend,
+// weighted by the time fraction towards the later frame; where they disagree the backward pose wins
+// unless it fits its event frame clearly worse. The live poses stay as tracked.
+TEST(BackwardEvents, PosesTrackedAgainAreMergedWithTheForwardOnes) {
   const Cases cs = makeCases();
   const OdometryConfig cfg;
   const StampedPose before{0, SE3()};  // the keyframe's frame
@@ -86,26 +87,38 @@ TEST(BackwardEvents, PosesTrackedAgainReplaceTheForwardOnesBackToWhereTheyAgree)
   std::vector<OdometryFailure> rejected;
   const BackwardPoses b = trackBackwards(cs.buffered, pass, cs.c.front().cam, cfg, rejected);
   ASSERT_EQ(b.poses.size(), 3u);
-  // Forward poses: the newest 1 cm off what the backward pass finds, the middle one equal to it, the
-  // oldest 1 cm off again.
-  const SE3 off(SO3(), Vec3(0.01, 0, 0));
+  ASSERT_EQ(b.correlations.size(), 3u);
+  // Forward poses: the oldest and the newest 1 cm off what the backward pass finds (outside the 2 mm
+  // gate), the oldest with a clearly higher correlation, the newest with a lower one; the middle one
+  // 1 mm off (inside the gate).
+  const SE3 off(SO3(), Vec3(0.01, 0, 0)), near(SO3(), Vec3(0.001, 0, 0));
+  const double margin = kRetrackCorrelationMargin;
   OdometryResult res;
   for (std::size_t k = 0; k < 3; ++k) {
     const SE3 T_back = b.poses[2 - k].T_w_c;  // b.poses is newest first
-    res.events.push_back({cs.buffered[k].t, k == 1 ? T_back : T_back * off});
+    res.events.push_back({cs.buffered[k].t, T_back * (k == 1 ? near : off)});
     res.event_last_t.push_back(cs.buffered[k].t_last);
     res.event_anchors.push_back({7, res.events.back().T_w_c});
+    res.event_correlations.push_back(b.correlations[2 - k] + (k == 0 ? 1.5 : k == 2 ? 0.5 : -1.0) * margin);
   }
   const OdometryResult forward = res;
-  const std::size_t n = retrackDriftedEvents(cs.buffered, before, cs.pass.start, *cs.pass.ref, SE3(),
-                                             cs.c.front().cam, cfg, res);
-  EXPECT_EQ(n, 1u);
+  const std::size_t n =
+      retrackEvents(cs.buffered, before, cs.pass.start, *cs.pass.ref, SE3(), cs.c.front().cam, cfg, res);
+  EXPECT_EQ(n, 2u);
+  // The newest: the backward pose (its correlation lower, but within the margin).
   EXPECT_EQ(res.event_anchors[2].kf_id, b.kf_id);
   EXPECT_LT((res.event_anchors[2].T_kf_c.inverse() * b.poses[0].T_w_c).log().norm(), 1e-9);
-  for (std::size_t k = 0; k < 2; ++k) {
-    EXPECT_EQ(res.event_anchors[k].kf_id, 7);
-    EXPECT_LT((res.event_anchors[k].T_kf_c.inverse() * forward.event_anchors[k].T_kf_c).log().norm(), 1e-12);
-  }
+  // The middle: w of the way from the forward pose to the backward one, w its time's fraction.
+  const double w = toSeconds(cs.buffered[1].t - before.t) / toSeconds(cs.pass.start.t - before.t);
+  ASSERT_GT(w, 0.2);
+  ASSERT_LT(w, 0.95);
+  EXPECT_EQ(res.event_anchors[1].kf_id, b.kf_id);
+  const SE3 blend = res.event_anchors[1].T_kf_c;
+  EXPECT_NEAR((forward.events[1].T_w_c.inverse() * blend).translation().norm(), w * 0.001, 1e-9);
+  EXPECT_NEAR((b.poses[1].T_w_c.inverse() * blend).translation().norm(), (1 - w) * 0.001, 1e-9);
+  // The oldest: kept, the backward pose fitting its event frame worse by more than the margin.
+  EXPECT_EQ(res.event_anchors[0].kf_id, 7);
+  EXPECT_LT((res.event_anchors[0].T_kf_c.inverse() * forward.event_anchors[0].T_kf_c).log().norm(), 1e-12);
   for (std::size_t k = 0; k < 3; ++k)
     EXPECT_LT((res.events[k].T_w_c.inverse() * forward.events[k].T_w_c).log().norm(), 1e-12);
   EXPECT_TRUE(res.failures.empty());
