@@ -250,7 +250,7 @@ struct OdometryResult {
   std::size_t keyframes_deferred = 0;
   std::size_t early_references = 0;  // keyframes tracked against before their bundle adjustment
   std::size_t feature_starts = 0;    // frames whose pose came from the alignment from ORB features
-  std::size_t events_retracked = 0;  // event poses those frames replaced in the refined trajectory
+  std::size_t events_retracked = 0;  // event poses moved by tracking sparse intervals again backwards
   std::size_t buffered_thinned = 0;  // times the event frames kept during the bootstrap were thinned
   bool initialized = false;
   TimeNs init_t = 0;   // time of the frame that completed the initialization
