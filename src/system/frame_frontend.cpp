@@ -309,9 +309,7 @@ FrameTrackResult FrameFrontend::align(TimeNs t, const cv::Mat& img, const SE3* p
       T_f_kf = T_try, alpha = a_try, beta = b_try, tr = tr2;
     }
   }
-  if (has_last_ && cfg_.feature_start.min_interval_s > 0 &&
-      toSeconds(t - last_t_) >= cfg_.feature_start.min_interval_s)
-    alignFromFeatures(t, img, tr, T_f_kf, alpha, beta);
+  if (has_last_ && cfg_.feature_start.sparse(last_t_, t)) alignFromFeatures(t, img, tr, T_f_kf, alpha, beta);
   if (tr.ok) last_rmse_ = tr.rmse, last_residuals_ = tr.residuals;
   return tr;
 }

@@ -99,6 +99,10 @@ struct FeatureStartConfig {
   double min_interval_s = 0.4;
   double max_rmse_ratio = 0.8;
   bool retrack_events = true;
+  // Whether a frame at t comes a sparse interval after one at t_before (t_before < 0: none).
+  bool sparse(TimeNs t_before, TimeNs t) const {
+    return min_interval_s > 0 && t_before >= 0 && t - t_before >= fromSeconds(min_interval_s);
+  }
 };
 
 EDS_FIELDS(FeatureStartConfig, min_interval_s, max_rmse_ratio, retrack_events)

@@ -154,7 +154,7 @@ void OdometryCore::trackFrame(TimeNs t, const cv::Mat& img) {
   const SE3 T_w_f = odo_->track(t, img, found ? &*found : prior ? &last_event_.T_w_c : nullptr);
   if (found && cfg_.use_events) trackEventsSinceLoss(t, odo_->lastTrackOk() ? T_w_f : *found);
   if (odo_->lastTrackOk()) {
-    const bool sparse = sparseAfter(last_aligned_.t, t);
+    const bool sparse = cfg_.feature_start.sparse(last_aligned_.t, t);
     if (!found && sparse && cfg_.feature_start.retrack_events && !since_frame_.empty())
       res_.events_retracked += retrackEvents(since_frame_, last_aligned_, {t, T_w_f}, odo_->reference(),
                                              odo_->T_w_kf(), und_.pinhole(), cfg_, res_);
@@ -262,7 +262,7 @@ void OdometryCore::initialize(TimeNs t, const cv::Mat& img) {
   res_.frame_anchors.push_back({ref_id, T_w_f});
   frame_ok_.push_back(1);
   res_.tracked += boot_traj.size();
-  sinceFrame({t, T_w_f}, sparseAfter(boot_traj[boot_traj.size() - 2].t, t));
+  sinceFrame({t, T_w_f}, cfg_.feature_start.sparse(boot_traj[boot_traj.size() - 2].t, t));
   if (!cfg_.use_events) return;
   trackEventsBeforeReference(ref, boot_traj);
   events_->setReference(ref, SE3());
@@ -313,11 +313,6 @@ void OdometryCore::trackEventsBeforeReference(const Keyframe& ref, const Traject
                           speed_r,
                           "event frame before the bootstrap's reference"};
   trackEventsBackwards(buffered_, pass, und_.pinhole(), cfg_, res_);
-}
-
-bool OdometryCore::sparseAfter(TimeNs t_before, TimeNs t) const {
-  return cfg_.feature_start.min_interval_s > 0 && t_before >= 0 &&
-         t - t_before >= fromSeconds(cfg_.feature_start.min_interval_s);
 }
 
 void OdometryCore::sinceFrame(const StampedPose& frame, bool sparse) {

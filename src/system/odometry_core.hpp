@@ -60,7 +60,6 @@ class OdometryCore {
   void trackEventsSinceLoss(TimeNs t, const SE3& T_w_f);
   void keepForBackfill(const EventFrame& ef);
   void keepSinceFrame(const EventFrame& ef);
-  bool sparseAfter(TimeNs t_before, TimeNs t) const;       // min_interval_s or more apart
   void sinceFrame(const StampedPose& frame, bool sparse);  // frame: the last aligned from now on
   void loseTrack(TimeNs t_last_pose, const std::string& cause);
   void startSegment(TimeNs t);
