@@ -49,35 +49,43 @@ class DepthLookup {
 
 }  // namespace
 
-Relocalization relocalize(const Keyframe& kf, const cv::Mat& frame, const CameraModel& pinhole,
-                          const RelocalizerConfig& cfg) {
-  Relocalization out;
+FeatureMatches matchFeatures(const cv::Mat& a, const cv::Mat& b, const FeatureMatchConfig& cfg) {
   // OpenCV's OpenCL path (a per-thread switch) would load a GPU runtime and compile kernels in the
   // middle of a recovery, and its results may differ from the CPU's; these images are small.
   cv::ocl::setUseOpenCL(false);
-  // Corners detected in both images (matched corner to corner, so both sides are located alike); a
-  // keyframe corner takes the depth of the keyframe point nearest to it.
+  // Corners detected in both images (matched corner to corner, so both sides are located alike).
   const cv::Ptr<cv::ORB> orb = cv::ORB::create(cfg.features);
-  std::vector<cv::KeyPoint> kf_keys, f_keys;
-  cv::Mat kf_desc, f_desc;
-  orb->detectAndCompute(as8bit(kf.image), cv::noArray(), kf_keys, kf_desc);
-  orb->detectAndCompute(as8bit(frame), cv::noArray(), f_keys, f_desc);
-  if (kf_desc.rows < cfg.min_inliers || f_desc.rows < cfg.min_inliers) return out;
-  const DepthLookup depth(kf.points, kf.image.cols, kf.image.rows, cfg.depth_radius_px);
-
+  std::vector<cv::KeyPoint> a_keys, b_keys;
+  cv::Mat a_desc, b_desc;
+  orb->detectAndCompute(as8bit(a), cv::noArray(), a_keys, a_desc);
+  orb->detectAndCompute(as8bit(b), cv::noArray(), b_keys, b_desc);
+  FeatureMatches out;
+  if (a_desc.empty() || b_desc.empty()) return out;
   std::vector<std::vector<cv::DMatch>> knn;
-  cv::BFMatcher(cv::NORM_HAMMING).knnMatch(f_desc, kf_desc, knn, 2);
-  std::vector<cv::Point3f> p_kf;
-  std::vector<cv::Point2f> px_f;
+  cv::BFMatcher(cv::NORM_HAMMING).knnMatch(b_desc, a_desc, knn, 2);
   for (const auto& m : knn) {
     if (m.empty() || m[0].distance > cfg.max_hamming) continue;
     if (m.size() > 1 && m[0].distance > cfg.ratio * m[1].distance) continue;
-    const cv::Point2f& q = kf_keys[static_cast<std::size_t>(m[0].trainIdx)].pt;
-    const double inv_depth = depth.at(q.x, q.y);
+    out.a.push_back(a_keys[static_cast<std::size_t>(m[0].trainIdx)].pt);
+    out.b.push_back(b_keys[static_cast<std::size_t>(m[0].queryIdx)].pt);
+  }
+  return out;
+}
+
+Relocalization relocalize(const Keyframe& kf, const cv::Mat& frame, const CameraModel& pinhole,
+                          const RelocalizerConfig& cfg) {
+  Relocalization out;
+  // A keyframe corner takes the depth of the keyframe point nearest to it.
+  const FeatureMatches m = matchFeatures(kf.image, frame, {cfg.features, cfg.max_hamming, cfg.ratio});
+  const DepthLookup depth(kf.points, kf.image.cols, kf.image.rows, cfg.depth_radius_px);
+  std::vector<cv::Point3f> p_kf;
+  std::vector<cv::Point2f> px_f;
+  for (std::size_t i = 0; i < m.a.size(); ++i) {
+    const double inv_depth = depth.at(m.a[i].x, m.a[i].y);
     if (!(inv_depth > 0)) continue;
-    const Vec3 X = pinhole.pinholeRay(q.x, q.y) / inv_depth;
+    const Vec3 X = pinhole.pinholeRay(m.a[i].x, m.a[i].y) / inv_depth;
     p_kf.emplace_back(static_cast<float>(X.x()), static_cast<float>(X.y()), static_cast<float>(X.z()));
-    px_f.push_back(f_keys[m[0].queryIdx].pt);
+    px_f.push_back(m.b[i]);
   }
   out.matches = static_cast<int>(p_kf.size());
   if (out.matches < cfg.min_inliers) return out;

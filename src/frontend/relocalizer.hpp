@@ -5,6 +5,7 @@
 // perspective-n-point solve in RANSAC (OpenCV). The direct alignment refines what this finds.
 #include <opencv2/core.hpp>
 #include <optional>
+#include <vector>
 
 #include "core/camera.hpp"
 #include "core/reflect.hpp"
@@ -25,6 +26,22 @@ struct RelocalizerConfig {
 
 EDS_FIELDS(RelocalizerConfig, features, depth_radius_px, max_hamming, ratio, ransac_px, min_inliers,
            min_inlier_fraction)
+
+// ORB features of two images matched one to one (a match must be distinctly the best of its image's).
+struct FeatureMatchConfig {
+  int features = 1500;   // detected in each image
+  int max_hamming = 64;  // of a match (of 256 bits)
+  double ratio = 0.8;    // best match / second best, Hamming distances
+};
+
+EDS_FIELDS(FeatureMatchConfig, features, max_hamming, ratio)
+
+struct FeatureMatches {
+  std::vector<cv::Point2f> a, b;  // a[i] in the first image matches b[i] in the second
+};
+
+// `a`, `b`: CV_32F in [0, 1] or 8-bit.
+FeatureMatches matchFeatures(const cv::Mat& a, const cv::Mat& b, const FeatureMatchConfig& cfg);
 
 struct Relocalization {
   bool ok = false;  // enough matches agree on T_f_kf

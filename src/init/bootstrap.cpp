@@ -19,6 +19,11 @@ void BootstrapConfig::validate() const {
       !(min_inlier_fraction_sparse >= 0 && min_inlier_fraction_sparse <= 1) || depth_prior_weight < 0 ||
       final_views < 2)
     throw std::invalid_argument("bootstrap: bad configuration");
+  const FeatureMatchConfig& f = geometric_init.features;
+  if (f.features < 8 || f.max_hamming < 0 || f.max_hamming > 256 || !(f.ratio > 0 && f.ratio <= 1))
+    throw std::invalid_argument(
+        "bootstrap.geometric_init.features: features must be >= 8 (an essential matrix needs 5 matches), "
+        "max_hamming in [0, 256], ratio in (0, 1]");
 }
 
 Bootstrap::Bootstrap(const CameraModel& pinhole, BootstrapConfig cfg)
@@ -91,9 +96,9 @@ bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image, const SE3* hint) {
     logf(LogLevel::kDebug, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg",
          frames_.size(), g->planar, g->inliers, g->parallax_deg);
   if (g && !g->planar && initFromGeometry(t, image, *g)) return true;
-  // Tracks that only the events' pose kept serve this frame alone: the photometric path does not wait for
-  // them (the next frames' corners, tracked on from there, made weak late starts).
-  if ((!g && geo_.tracks() < cfg_.geometric_init.min_tracks) || geo_.tracksFromEvents())
+  // Tracks that only the events' pose or the features kept serve this frame alone: the photometric path
+  // does not wait for them (the next frames' corners, tracked on from there, made weak late starts).
+  if ((!g && geo_.tracks() < cfg_.geometric_init.min_tracks) || geo_.tracksReseeded())
     geo_state_ = GeoState::kUnavailable;
   return false;
 }

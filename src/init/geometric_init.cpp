@@ -23,21 +23,24 @@ GeometricInit::GeometricInit(const CameraModel& pinhole, GeometricInitConfig cfg
     : cam_(pinhole), cfg_(cfg) {}
 
 void GeometricInit::reset(const cv::Mat& ref_image) {
-  const cv::Mat ref8 = toGray8(ref_image);
-  cv::buildOpticalFlowPyramid(ref8, prev_pyr_, kWindow, kLevels, true);
+  ref8_ = toGray8(ref_image);
+  cv::buildOpticalFlowPyramid(ref8_, ref_pyr_, kWindow, kLevels, true);
+  prev_pyr_ = ref_pyr_;
   ref_.clear();
-  cv::goodFeaturesToTrack(ref8, ref_, cfg_.max_features, cfg_.quality, cfg_.min_distance);
+  cv::goodFeaturesToTrack(ref8_, ref_, cfg_.max_features, cfg_.quality, cfg_.min_distance);
   cur_ = ref_;
+  corners0_ = ref_;
   corners_ = ref_.size();
   ids_.resize(ref_.size());
   for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = static_cast<int>(i);
   seen_.clear();
-  from_events_ = false;
+  from_events_ = from_features_ = false;
 }
 
-// Tracks the live corners into `pyr` (forward and back), from `predicted` where given; keep[i] says
-// whether track i passed the check. Returns how many did.
-std::size_t GeometricInit::track(const std::vector<cv::Mat>& pyr, cv::Size size,
+// Tracks `from` (points of `from_pyr`) into `pyr` (forward and back), from `predicted` where given;
+// keep[i] says whether track i passed the check. Returns how many did.
+std::size_t GeometricInit::track(const std::vector<cv::Mat>& from_pyr, const std::vector<cv::Point2f>& from,
+                                 const std::vector<cv::Mat>& pyr, cv::Size size,
                                  const std::vector<cv::Point2f>* predicted, std::vector<cv::Point2f>& next,
                                  std::vector<unsigned char>& keep) const {
   std::vector<cv::Point2f> back;
@@ -46,16 +49,16 @@ std::size_t GeometricInit::track(const std::vector<cv::Mat>& pyr, cv::Size size,
   int flags = 0;
   // From a prediction the check tracks back from the corners' previous positions as well: from where
   // the forward tracking ended it would not reach them either.
-  if (predicted) next = *predicted, back = cur_, flags = cv::OPTFLOW_USE_INITIAL_FLOW;
+  if (predicted) next = *predicted, back = from, flags = cv::OPTFLOW_USE_INITIAL_FLOW;
   const cv::TermCriteria term(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
-  cv::calcOpticalFlowPyrLK(prev_pyr_, pyr, cur_, next, st, err, kWindow, kLevels, term, flags);
-  cv::calcOpticalFlowPyrLK(pyr, prev_pyr_, next, back, st_back, err, kWindow, kLevels, term, flags);
-  keep.assign(cur_.size(), 0);
+  cv::calcOpticalFlowPyrLK(from_pyr, pyr, from, next, st, err, kWindow, kLevels, term, flags);
+  cv::calcOpticalFlowPyrLK(pyr, from_pyr, next, back, st_back, err, kWindow, kLevels, term, flags);
+  keep.assign(from.size(), 0);
   std::size_t k = 0;
-  for (std::size_t i = 0; i < cur_.size(); ++i) {
+  for (std::size_t i = 0; i < from.size(); ++i) {
     const bool inside =
         next[i].x >= 0 && next[i].y >= 0 && next[i].x <= size.width - 1 && next[i].y <= size.height - 1;
-    keep[i] = st[i] && st_back[i] && inside && cv::norm(back[i] - cur_[i]) <= 0.5;
+    keep[i] = st[i] && st_back[i] && inside && cv::norm(back[i] - from[i]) <= 0.5;
     k += keep[i];
   }
   return k;
@@ -84,14 +87,14 @@ bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint) 
   cv::buildOpticalFlowPyramid(gray, pyr, kWindow, kLevels, true);
   std::vector<cv::Point2f> next;
   std::vector<unsigned char> keep;
-  std::size_t k = track(pyr, gray.size(), nullptr, next, keep);
+  std::size_t k = track(prev_pyr_, cur_, pyr, gray.size(), nullptr, next, keep);
   if (cfg_.from_events && hint && sparse && static_cast<int>(k) < cfg_.min_tracks) {
     // Between frames far apart the corners move beyond the window's reach: start them where the events'
     // pose puts them.
     std::vector<cv::Point2f> next_h;
     std::vector<unsigned char> keep_h;
     const std::vector<cv::Point2f> predicted = predict(*hint);
-    const std::size_t k_h = track(pyr, gray.size(), &predicted, next_h, keep_h);
+    const std::size_t k_h = track(prev_pyr_, cur_, pyr, gray.size(), &predicted, next_h, keep_h);
     logf(LogLevel::kDebug, "bootstrap: %zu corners tracked, %zu from the events' pose", k, k_h);
     if (k_h > k) next.swap(next_h), keep.swap(keep_h), from_events_ = true;
   }
@@ -108,6 +111,10 @@ bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint) 
   ref_.resize(k);
   cur_.resize(k);
   ids_.resize(k);
+  if (cfg_.from_features && sparse && static_cast<int>(k) < cfg_.min_tracks) {
+    matchFeaturesInstead(gray, pyr);
+    k = cur_.size();
+  }
   prev_pyr_ = std::move(pyr);
   if (static_cast<int>(k) < cfg_.min_tracks) return false;
   std::vector<double> flow(k);
@@ -117,6 +124,62 @@ bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint) 
     logf(LogLevel::kDebug, "bootstrap: %zu of %zu corners tracked, median flow %.1f px", k, n_before,
          flow[k / 2]);
   return flow[k / 2] >= cfg_.min_flow_px;
+}
+
+// Where the matched features move the reference's corners: each by the median displacement of the
+// matches nearest to it in the reference (the scene's depth varies; neighbours mostly share it).
+std::vector<cv::Point2f> GeometricInit::flowFromMatches(const FeatureMatches& m) const {
+  constexpr std::size_t kNearest = 5;
+  std::vector<cv::Point2f> pred(corners0_.size());
+  std::vector<std::pair<float, std::size_t>> by_distance(m.a.size());
+  std::vector<float> dx(kNearest), dy(kNearest);
+  for (std::size_t i = 0; i < corners0_.size(); ++i) {
+    for (std::size_t j = 0; j < m.a.size(); ++j) {
+      const cv::Point2f d = m.a[j] - corners0_[i];
+      by_distance[j] = {d.dot(d), j};
+    }
+    const std::size_t n = std::min(kNearest, by_distance.size());
+    std::partial_sort(by_distance.begin(), by_distance.begin() + n, by_distance.end());
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t q = by_distance[j].second;
+      dx[j] = m.b[q].x - m.a[q].x, dy[j] = m.b[q].y - m.a[q].y;
+    }
+    std::nth_element(dx.begin(), dx.begin() + n / 2, dx.begin() + n);
+    std::nth_element(dy.begin(), dy.begin() + n / 2, dy.begin() + n);
+    pred[i] = corners0_[i] + cv::Point2f(dx[n / 2], dy[n / 2]);
+  }
+  return pred;
+}
+
+// The reference's corners tracked again into the frame (`gray`, its pyramid `pyr`) from where the
+// reference's matched ORB features put them; they replace the tracks where they are more (new track
+// ids, unseen in the frames before).
+void GeometricInit::matchFeaturesInstead(const cv::Mat& gray, const std::vector<cv::Mat>& pyr) {
+  const FeatureMatches m = matchFeatures(ref8_, gray, cfg_.features);
+  if (m.a.size() < 5) return;
+  const std::vector<cv::Point2f> predicted = flowFromMatches(m);
+  std::vector<cv::Point2f> next;
+  std::vector<unsigned char> keep;
+  const std::size_t k = track(ref_pyr_, corners0_, pyr, gray.size(), &predicted, next, keep);
+  logf(LogLevel::kDebug, "bootstrap: %zu corners tracked, %zu features matched, %zu corners from them",
+       cur_.size(), m.a.size(), k);
+  // Too few of them (a wide swing distorts the corners' windows, near objects occlude): the matches
+  // themselves, whole pixels of ORB's levels as they are (their essential matrix is rougher).
+  const bool raw = static_cast<int>(k) < cfg_.min_tracks && m.a.size() > k;
+  if (std::max(k, raw ? m.a.size() : 0) <= cur_.size()) return;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  ref_.clear(), cur_.clear(), ids_.clear();
+  for (std::size_t i = 0; i < (raw ? m.a.size() : corners0_.size()); ++i) {
+    if (!raw && !keep[i]) continue;
+    ref_.push_back(raw ? m.a[i] : corners0_[i]), cur_.push_back(raw ? m.b[i] : next[i]);
+  }
+  for (std::vector<cv::Point2f>& s : seen_) s.resize(corners_ + cur_.size(), cv::Point2f(nan, nan));
+  for (std::size_t i = 0; i < cur_.size(); ++i) {
+    ids_.push_back(static_cast<int>(corners_ + i));
+    seen_.back()[corners_ + i] = cur_[i];
+  }
+  corners_ += cur_.size();
+  from_events_ = false, from_features_ = true;
 }
 
 // The two-view motion of the live tracks: the planar verdict, or the essential matrix's pose with its
@@ -167,14 +230,14 @@ bool GeometricInit::twoViewMotion(GeometricInitResult& res, const SE3* hint, cv:
 std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse, const SE3* hint) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   seen_.emplace_back(corners_, cv::Point2f(nan, nan));
-  from_events_ = false;
+  from_events_ = from_features_ = false;
   if (prev_pyr_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
   if (!advance(image, sparse, hint)) return std::nullopt;
   GeometricInitResult res;
   cv::Mat mask_e;
   Mat3 Re;
   Vec3 te;
-  if (!twoViewMotion(res, from_events_ ? hint : nullptr, mask_e, Re, te)) return std::nullopt;
+  if (!twoViewMotion(res, tracksReseeded() ? hint : nullptr, mask_e, Re, te)) return std::nullopt;
   if (res.planar) return res;
   const std::size_t k = cur_.size();
   std::vector<double> angles;

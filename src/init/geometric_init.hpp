@@ -13,6 +13,7 @@
 #include "core/camera.hpp"
 #include "core/reflect.hpp"
 #include "core/se3.hpp"
+#include "frontend/relocalizer.hpp"
 #include "mapping/depth_fill.hpp"
 
 namespace eds {
@@ -37,11 +38,15 @@ struct GeometricInitConfig {
   // the camera within this angle of the events' translation direction: that direction is rough (20-40
   // deg off), but MAGSAC++'s wrong minorities there were 90-150 deg off.
   double max_events_direction_deg = 60.0;
+  // When that leaves too few tracks too, the reference's ORB features matched to the frame's take their
+  // place for that frame (MAGSAC++'s result on them is held to the events' direction as well).
+  bool from_features = true;
+  FeatureMatchConfig features;
 };
 
 EDS_FIELDS(GeometricInitConfig, max_features, quality, min_distance, min_flow_px, min_tracks, ransac_px,
            planar_ratio, max_reproj_px, min_parallax_deg, min_parallax_deg_sparse, from_events,
-           max_events_direction_deg)
+           max_events_direction_deg, from_features, features)
 
 struct GeometricInitResult {
   bool planar = false;
@@ -65,16 +70,20 @@ class GeometricInit {
   std::optional<GeometricInitResult> add(const cv::Mat& image, bool sparse = false,
                                          const SE3* hint = nullptr);
   int tracks() const { return static_cast<int>(cur_.size()); }
-  // Whether the last frame's tracks are those started from the events' pose.
-  bool tracksFromEvents() const { return from_events_; }
+  // Whether the last frame's tracks are those started from the events' pose or matched features: they
+  // serve that frame alone.
+  bool tracksReseeded() const { return from_events_ || from_features_; }
 
  private:
   CameraModel cam_;
   GeometricInitConfig cfg_;
-  std::size_t track(const std::vector<cv::Mat>& pyr, cv::Size size, const std::vector<cv::Point2f>* predicted,
+  std::size_t track(const std::vector<cv::Mat>& from_pyr, const std::vector<cv::Point2f>& from,
+                    const std::vector<cv::Mat>& pyr, cv::Size size, const std::vector<cv::Point2f>* predicted,
                     std::vector<cv::Point2f>& next, std::vector<unsigned char>& keep) const;
   std::vector<cv::Point2f> predict(const SE3& T_c_ref) const;
   bool advance(const cv::Mat& image, bool sparse, const SE3* hint);
+  void matchFeaturesInstead(const cv::Mat& gray, const std::vector<cv::Mat>& pyr);
+  std::vector<cv::Point2f> flowFromMatches(const FeatureMatches& m) const;
   bool twoViewMotion(GeometricInitResult& res, const SE3* hint, cv::Mat& mask_e, Mat3& Re, Vec3& te) const;
   // Poses of the frames before the current one, from the triangulated points (indexed like ref_).
   std::vector<std::optional<SE3>> posesBefore(const std::vector<int>& triangulated,
@@ -87,7 +96,10 @@ class GeometricInit {
   // Each live track's corner index in the reference, and every frame's track positions by that index
   // (NaN once lost): the frames in between get their poses from them once the depths are known.
   std::size_t corners_ = 0;
-  bool from_events_ = false;
+  bool from_events_ = false, from_features_ = false;
+  cv::Mat ref8_;                       // the reference image, 8-bit (for its features)
+  std::vector<cv::Mat> ref_pyr_;       // and its pyramid
+  std::vector<cv::Point2f> corners0_;  // all of the reference's corners
   std::vector<int> ids_;
   std::vector<std::vector<cv::Point2f>> seen_;
 };

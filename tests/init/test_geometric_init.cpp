@@ -64,14 +64,14 @@ SE3 eventsPose(const TwoFrames& tf, double dir_off_deg) {
 struct Fit {
   std::optional<GeometricInitResult> g;
   int tracks = 0;
-  bool from_events = false;
+  bool reseeded = false;            // the tracks were started from the events' pose or matched as features
   double rot_err = 0, dir_err = 0;  // deg, against the true motion
 };
 
-Fit fitSecond(const TwoFrames& tf, bool sparse, const SE3* hint) {
-  GeometricInit geo(test::simCamera(), {});
+Fit fitSecond(const TwoFrames& tf, bool sparse, const SE3* hint, const GeometricInitConfig& cfg = {}) {
+  GeometricInit geo(test::simCamera(), cfg);
   geo.reset(tf.first);
-  Fit f{geo.add(tf.second, sparse, hint), geo.tracks(), geo.tracksFromEvents()};
+  Fit f{geo.add(tf.second, sparse, hint), geo.tracks(), geo.tracksReseeded()};
   if (!f.g || f.g->planar) return f;
   f.rot_err = rotationErrorDeg(f.g->T_c_ref, tf.T_c_ref);
   f.dir_err = angleDeg(f.g->T_c_ref.translation(), tf.T_c_ref.translation());
@@ -87,7 +87,8 @@ Fit fitSecond(const TwoFrames& tf, bool sparse, const SE3* hint) {
 // 160 tracks (145 inliers), rotation 2.8 deg and translation direction 9.2 deg off.
 TEST(GeometricInit, CornersLostBetweenSparseFramesAreFoundFromTheEventsPose) {
   const TwoFrames tf = simulateSwing(3, 20.0);
-  const Fit plain = fitSecond(tf, true, nullptr);
+  const GeometricInitConfig no_features{.from_features = false};
+  const Fit plain = fitSecond(tf, true, nullptr, no_features);
   EXPECT_FALSE(plain.g);
   EXPECT_LT(plain.tracks, 20);
 
@@ -99,12 +100,28 @@ TEST(GeometricInit, CornersLostBetweenSparseFramesAreFoundFromTheEventsPose) {
   EXPECT_FALSE(dense.g);
   EXPECT_LT(dense.tracks, 20);
 
-  const Fit hinted = fitSecond(tf, true, &hint);
+  const Fit hinted = fitSecond(tf, true, &hint, no_features);
   ASSERT_TRUE(hinted.g);
   ASSERT_FALSE(hinted.g->planar);
   EXPECT_GT(hinted.tracks, 100);
   EXPECT_LT(hinted.rot_err, 4.0);
   EXPECT_LT(hinted.dir_err, 15.0);
+}
+
+// The same swing without the events: the reference's ORB features matched to the frame's take the lost
+// tracks' place (sparse frames only).
+TEST(GeometricInit, CornersLostBetweenSparseFramesAreReplacedByMatchedFeatures) {
+  const TwoFrames tf = simulateSwing(3, 20.0);
+  const Fit dense = fitSecond(tf, false, nullptr);
+  EXPECT_FALSE(dense.g);
+  EXPECT_FALSE(dense.reseeded);
+  const Fit matched = fitSecond(tf, true, nullptr);
+  EXPECT_TRUE(matched.reseeded);
+  ASSERT_TRUE(matched.g);
+  ASSERT_FALSE(matched.g->planar);
+  EXPECT_GT(matched.g->inliers, 60);
+  EXPECT_LT(matched.rot_err, 1.0);
+  EXPECT_LT(matched.dir_err, 10.0);
 }
 
 // A 20 deg swing with 5 cm of translation: RANSAC's essential matrix on the corners found from the events'
@@ -115,7 +132,7 @@ TEST(GeometricInit, MagsacOnCornersFromTheEventsPoseMustAgreeWithTheEventsDirect
   const TwoFrames tf = simulateSwing(1, 20.0, Vec3(0.05, 0.005, 0.0075));
   const SE3 hint = eventsPose(tf, 20.0);
   const Fit agreeing = fitSecond(tf, true, &hint);
-  ASSERT_TRUE(agreeing.from_events);
+  ASSERT_TRUE(agreeing.reseeded);
   ASSERT_TRUE(agreeing.g);
   ASSERT_FALSE(agreeing.g->planar);
   EXPECT_LT(agreeing.rot_err, 2.0);
@@ -123,7 +140,7 @@ TEST(GeometricInit, MagsacOnCornersFromTheEventsPoseMustAgreeWithTheEventsDirect
 
   const SE3 hint_off = eventsPose(tf, 100.0);
   const Fit disagreeing = fitSecond(tf, true, &hint_off);
-  EXPECT_TRUE(disagreeing.from_events);
+  EXPECT_TRUE(disagreeing.reseeded);
   EXPECT_FALSE(disagreeing.g);
 }
 
