@@ -24,6 +24,8 @@ void BootstrapConfig::validate() const {
     throw std::invalid_argument(
         "bootstrap.geometric_init.features: features must be >= 8 (an essential matrix needs 5 matches), "
         "max_hamming in [0, 256], ratio in (0, 1]");
+  if (!(geometric_init.min_parallax_deg_matches >= 0))
+    throw std::invalid_argument("bootstrap.geometric_init.min_parallax_deg_matches must be >= 0");
 }
 
 Bootstrap::Bootstrap(const CameraModel& pinhole, BootstrapConfig cfg)

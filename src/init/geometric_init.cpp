@@ -34,7 +34,7 @@ void GeometricInit::reset(const cv::Mat& ref_image) {
   ids_.resize(ref_.size());
   for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = static_cast<int>(i);
   seen_.clear();
-  from_events_ = from_features_ = false;
+  from_events_ = from_features_ = raw_matches_ = false;
 }
 
 // Tracks `from` (points of `from_pyr`) into `pyr` (forward and back), from `predicted` where given;
@@ -179,7 +179,7 @@ void GeometricInit::matchFeaturesInstead(const cv::Mat& gray, const std::vector<
     seen_.back()[corners_ + i] = cur_[i];
   }
   corners_ += cur_.size();
-  from_events_ = false, from_features_ = true;
+  from_events_ = false, from_features_ = true, raw_matches_ = raw;
 }
 
 // The two-view motion of the live tracks: the planar verdict, or the essential matrix's pose with its
@@ -230,7 +230,7 @@ bool GeometricInit::twoViewMotion(GeometricInitResult& res, const SE3* hint, cv:
 std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse, const SE3* hint) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   seen_.emplace_back(corners_, cv::Point2f(nan, nan));
-  from_events_ = from_features_ = false;
+  from_events_ = from_features_ = raw_matches_ = false;
   if (prev_pyr_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
   if (!advance(image, sparse, hint)) return std::nullopt;
   GeometricInitResult res;
@@ -269,7 +269,10 @@ std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool
   if (static_cast<int>(res.points.size()) < cfg_.min_tracks) return std::nullopt;
   std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
   res.parallax_deg = angles[angles.size() / 2] * 180.0 / M_PI;
-  if (res.parallax_deg < (sparse ? cfg_.min_parallax_deg_sparse : cfg_.min_parallax_deg)) {
+  const double min_parallax = raw_matches_ ? cfg_.min_parallax_deg_matches
+                              : sparse     ? cfg_.min_parallax_deg_sparse
+                                           : cfg_.min_parallax_deg;
+  if (res.parallax_deg < min_parallax) {
     logf(LogLevel::kDebug, "bootstrap: median triangulation angle %.2f deg", res.parallax_deg);
     return std::nullopt;
   }

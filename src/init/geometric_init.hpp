@@ -42,11 +42,16 @@ struct GeometricInitConfig {
   // place for that frame (MAGSAC++'s result on them is held to the events' direction as well).
   bool from_features = true;
   FeatureMatchConfig features;
+  // Where the matches themselves are the tracks (too few corners followed them), the triangulation angle
+  // they must reach: off by up to a pixel of ORB's coarser levels, such matches on a textured wall gave
+  // essential matrices that took most of the translation for rotation (measured parallax 1-3 deg, right
+  // ones 10-36 deg).
+  double min_parallax_deg_matches = 5.0;
 };
 
 EDS_FIELDS(GeometricInitConfig, max_features, quality, min_distance, min_flow_px, min_tracks, ransac_px,
            planar_ratio, max_reproj_px, min_parallax_deg, min_parallax_deg_sparse, from_events,
-           max_events_direction_deg, from_features, features)
+           max_events_direction_deg, from_features, features, min_parallax_deg_matches)
 
 struct GeometricInitResult {
   bool planar = false;
@@ -97,6 +102,7 @@ class GeometricInit {
   // (NaN once lost): the frames in between get their poses from them once the depths are known.
   std::size_t corners_ = 0;
   bool from_events_ = false, from_features_ = false;
+  bool raw_matches_ = false;           // the tracks are the feature matches themselves
   cv::Mat ref8_;                       // the reference image, 8-bit (for its features)
   std::vector<cv::Mat> ref_pyr_;       // and its pyramid
   std::vector<cv::Point2f> corners0_;  // all of the reference's corners

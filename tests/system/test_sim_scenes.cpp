@@ -4,6 +4,7 @@
 // (deterministic); the refined trajectories, as eds run writes them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
@@ -162,6 +163,67 @@ TEST(SimScenes, DeskAtOneFramePerSecond) {
   // Both intervals after the bootstrap are tracked again from their start (measured 148 of 152 poses
   // merged; from 0.2 s into each interval, or the first interval left out, at most 80 %).
   EXPECT_GE(r.merged_share, 0.9);
+}
+
+// The first two frames' motion from the run's frame poses, against the truth: rotation error and the
+// angle between the translation directions (deg).
+std::pair<double, double> firstMotionErrorDeg(const OdometryResult& r, const Trajectory& gt) {
+  const auto truth = [&](TimeNs t) {
+    return std::min_element(gt.begin(), gt.end(),
+                            [&](const StampedPose& a, const StampedPose& b) {
+                              return std::abs(a.t - t) < std::abs(b.t - t);
+                            })
+        ->T_w_c;
+  };
+  const SE3 T_1_0 = r.frames_refined[1].T_w_c.inverse() * r.frames_refined[0].T_w_c;
+  const SE3 T_1_0_gt = truth(r.frames_refined[1].t).inverse() * truth(r.frames_refined[0].t);
+  const double rot = (T_1_0.so3().inverse() * T_1_0_gt.so3()).log().norm() * 180 / M_PI;
+  const double cos_dir = T_1_0.translation().normalized().dot(T_1_0_gt.translation().normalized());
+  return {rot, std::acos(std::clamp(cos_dir, -1.0, 1.0)) * 180 / M_PI};
+}
+
+// One frame a second along the fast half of the poster motion, at the desk (scene seed 4): 30 deg and
+// 45 cm between the first two frames, objects 0.6-2 m away. The optical flow keeps a handful of corners
+// and the events' pose too few more; the reference's ORB features matched to the frame's, used as the
+// tracks, initialize at the first frame after the reference (without them: no initialization in these
+// 3 s). Measured: 0.08 deg and 0.08 deg off, parallax 7.9 deg.
+TEST(SimScenes, FastDeskAtOneFramePerSecondInitializesFromMatchedFeatures) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const Sequence seq(windowSequence("desk", traj_file, 8.0, 3.0, 4, 2));
+  OdometryConfig cfg;
+  cfg.frame_rate = 1;
+  cfg.threaded_backend = false;
+  cfg.bootstrap.geometric_init.from_features = false;
+  EXPECT_FALSE(runOdometry(seq, cfg).initialized);
+  cfg.bootstrap.geometric_init.from_features = true;
+  const OdometryResult r = runOdometry(seq, cfg);
+  ASSERT_TRUE(r.initialized);
+  ASSERT_GE(r.frames_refined.size(), 2u);
+  const auto [rot_deg, dir_deg] = firstMotionErrorDeg(r, seq.groundTruth());
+  std::printf(
+      "[ desk, poster 8-11 s, seed 4, 1 Hz ] initialized after %.2f s; first motion %.2f deg, direction "
+      "%.2f deg off\n",
+      toSeconds(r.init_t - r.first_t), rot_deg, dir_deg);
+  EXPECT_LE(r.init_t - r.first_t, fromSeconds(1.0) + 1000);
+  EXPECT_LE(rot_deg, 1.0);
+  EXPECT_LE(dir_deg, 5.0);
+}
+
+// The same with scene seed 2: the matches' essential matrix at 1 s (124 of 163 inliers, most on the wall)
+// takes most of the translation for rotation (median triangulation angle 2.85 deg) and initialized
+// a map 30 deg and 108 deg off. Such a low angle from matches is refused; a later start must be right.
+TEST(SimScenes, FastDeskAtOneFramePerSecondRefusesMatchesOfLittleParallax) {
+  EDS_REQUIRE_SHARED(traj_file, "trajectories/ecd_poster_6dof_groundtruth.txt");
+  const Sequence seq(windowSequence("desk", traj_file, 8.0, 3.0, 2, 2));
+  OdometryConfig cfg;
+  cfg.frame_rate = 1;
+  cfg.threaded_backend = false;
+  const OdometryResult r = runOdometry(seq, cfg);
+  if (!r.initialized) return;
+  ASSERT_GE(r.frames_refined.size(), 2u);
+  const auto [rot_deg, dir_deg] = firstMotionErrorDeg(r, seq.groundTruth());
+  EXPECT_LE(rot_deg, 1.0);
+  EXPECT_LE(dir_deg, 5.0);
 }
 
 struct TurningRoomRun {
