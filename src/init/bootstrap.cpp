@@ -24,8 +24,9 @@ void BootstrapConfig::validate() const {
     throw std::invalid_argument(
         "bootstrap.geometric_init.features: features must be >= 8 (an essential matrix needs 5 matches), "
         "max_hamming in [0, 256], ratio in (0, 1]");
-  if (!(geometric_init.min_parallax_deg_matches >= 0))
-    throw std::invalid_argument("bootstrap.geometric_init.min_parallax_deg_matches must be >= 0");
+  if (!(geometric_init.min_parallax_deg_matches >= 0) || !(geometric_init.features_min_interval_s >= 0))
+    throw std::invalid_argument(
+        "bootstrap.geometric_init: min_parallax_deg_matches and features_min_interval_s must be >= 0");
 }
 
 Bootstrap::Bootstrap(const CameraModel& pinhole, BootstrapConfig cfg)
@@ -92,7 +93,8 @@ bool Bootstrap::tryGeometry(TimeNs t, const cv::Mat& image, const SE3* hint) {
   // taken then would let the constant-depth photometric path succeed on a 3D scene.
   geo_state_ = GeoState::kPending;
   const bool sparse = !frames_.empty() && t - frames_.back().t >= fromSeconds(cfg_.sparse_frame_interval_s);
-  const std::optional<GeometricInitResult> g = geo_.add(image, sparse, hint);
+  const double interval_s = frames_.empty() ? 0.0 : toSeconds(t - frames_.back().t);
+  const std::optional<GeometricInitResult> g = geo_.add(image, sparse, hint, interval_s);
   if (g && g->planar) geo_state_ = GeoState::kPlanar;
   if (g && logEnabled(LogLevel::kDebug))
     logf(LogLevel::kDebug, "bootstrap: geometry at frame %zu: planar %d inliers %d parallax %.2f deg",

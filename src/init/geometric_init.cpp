@@ -79,7 +79,7 @@ std::vector<cv::Point2f> GeometricInit::predict(const SE3& T_c_ref) const {
 
 // Tracks the corners into the next image and drops the lost ones; true when enough are left and they
 // moved far enough for a two-view estimate.
-bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint) {
+bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint, double interval_s) {
   const cv::Mat gray = toGray8(image);
   // Each image's pyramid (with its derivatives) built once: it serves both directions of this frame's
   // check and the next frame's tracking.
@@ -111,7 +111,8 @@ bool GeometricInit::advance(const cv::Mat& image, bool sparse, const SE3* hint) 
   ref_.resize(k);
   cur_.resize(k);
   ids_.resize(k);
-  if (cfg_.from_features && sparse && static_cast<int>(k) < cfg_.min_tracks) {
+  if (cfg_.from_features && sparse && interval_s >= cfg_.features_min_interval_s &&
+      static_cast<int>(k) < cfg_.min_tracks) {
     matchFeaturesInstead(gray, pyr);
     k = cur_.size();
   }
@@ -227,12 +228,13 @@ bool GeometricInit::twoViewMotion(GeometricInitResult& res, const SE3* hint, cv:
   return true;
 }
 
-std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse, const SE3* hint) {
+std::optional<GeometricInitResult> GeometricInit::add(const cv::Mat& image, bool sparse, const SE3* hint,
+                                                      double interval_s) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   seen_.emplace_back(corners_, cv::Point2f(nan, nan));
   from_events_ = from_features_ = raw_matches_ = false;
   if (prev_pyr_.empty() || static_cast<int>(cur_.size()) < cfg_.min_tracks) return std::nullopt;
-  if (!advance(image, sparse, hint)) return std::nullopt;
+  if (!advance(image, sparse, hint, interval_s)) return std::nullopt;
   GeometricInitResult res;
   cv::Mat mask_e;
   Mat3 Re;

@@ -71,7 +71,8 @@ struct Fit {
 Fit fitSecond(const TwoFrames& tf, bool sparse, const SE3* hint, const GeometricInitConfig& cfg = {}) {
   GeometricInit geo(test::simCamera(), cfg);
   geo.reset(tf.first);
-  Fit f{geo.add(tf.second, sparse, hint), geo.tracks(), geo.tracksReseeded()};
+  // The swing takes a second (sparse) or a frame at 20 Hz.
+  Fit f{geo.add(tf.second, sparse, hint, sparse ? 1.0 : 0.05), geo.tracks(), geo.tracksReseeded()};
   if (!f.g || f.g->planar) return f;
   f.rot_err = rotationErrorDeg(f.g->T_c_ref, tf.T_c_ref);
   f.dir_err = angleDeg(f.g->T_c_ref.translation(), tf.T_c_ref.translation());
