@@ -68,11 +68,14 @@ struct Fit {
   double rot_err = 0, dir_err = 0;  // deg, against the true motion
 };
 
-Fit fitSecond(const TwoFrames& tf, bool sparse, const SE3* hint, const GeometricInitConfig& cfg = {}) {
+// `interval_s`: the time between the two frames as the bootstrap gives it; by default the swing's second
+// (sparse) or a frame at 20 Hz.
+Fit fitSecond(const TwoFrames& tf, bool sparse, const SE3* hint, const GeometricInitConfig& cfg = {},
+              double interval_s = -1) {
+  if (interval_s < 0) interval_s = sparse ? 1.0 : 0.05;
   GeometricInit geo(test::simCamera(), cfg);
   geo.reset(tf.first);
-  // The swing takes a second (sparse) or a frame at 20 Hz.
-  Fit f{geo.add(tf.second, sparse, hint, sparse ? 1.0 : 0.05), geo.tracks(), geo.tracksReseeded()};
+  Fit f{geo.add(tf.second, sparse, hint, interval_s), geo.tracks(), geo.tracksReseeded()};
   if (!f.g || f.g->planar) return f;
   f.rot_err = rotationErrorDeg(f.g->T_c_ref, tf.T_c_ref);
   f.dir_err = angleDeg(f.g->T_c_ref.translation(), tf.T_c_ref.translation());
@@ -116,6 +119,10 @@ TEST(GeometricInit, CornersLostBetweenSparseFramesAreReplacedByMatchedFeatures) 
   const Fit dense = fitSecond(tf, false, nullptr);
   EXPECT_FALSE(dense.g);
   EXPECT_FALSE(dense.reseeded);
+  // Frames half a second apart are left to the photometric path (there the matches started worse).
+  const Fit half_second = fitSecond(tf, true, nullptr, {}, 0.5);
+  EXPECT_FALSE(half_second.g);
+  EXPECT_FALSE(half_second.reseeded);
   const Fit matched = fitSecond(tf, true, nullptr);
   EXPECT_TRUE(matched.reseeded);
   ASSERT_TRUE(matched.g);
