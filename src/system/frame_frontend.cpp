@@ -331,7 +331,11 @@ bool featureAlignmentWins(const FrameTrackResult& features, const FrameTrackResu
 void FrameFrontend::alignFromFeatures(TimeNs t, const cv::Mat& img, FrameTrackResult& tr, SE3& T_f_kf,
                                       double& alpha, double& beta) {
   const Relocalization r = eds::relocalize(ref_, img, cam_, cfg_.recovery.relocalizer);
-  if (!r.ok) return;
+  if (!r.ok) {
+    logf(LogLevel::kDebug, "frame %.3f: %d of %d feature matches agree: too few to align from", toSeconds(t),
+         r.inliers, r.matches);
+    return;
+  }
   SE3 T_try = r.T_f_kf;
   double a_try = alpha_, b_try = beta_;
   const FrameTrackResult tr2 = tracker_.track(img, T_try, a_try, b_try, 0);
