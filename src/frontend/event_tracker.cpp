@@ -72,6 +72,7 @@ void EventTracker::setKeyframe(const Keyframe& kf, int max_points) {
     throw std::invalid_argument("event tracker: keyframe " + std::to_string(kf.id) +
                                 " has no point with a depth (" + std::to_string(kf.points.size()) +
                                 " points)");
+  strikes_.assign(p_kf_.size(), 0);
   const auto n = static_cast<Eigen::Index>(p_kf_.size());
   std::vector<double> rho(n);
   for (Eigen::Index i = 0; i < n; ++i) rho[i] = g_rho_[i].z();
@@ -124,6 +125,7 @@ void EventTracker::chooseSet(const SE3& T_ef_kf, double lo, int width, int heigh
   const double hi_x = width - 1 - lo, hi_y = height - 1 - lo;
   solve_set_.clear();
   for (std::size_t i = 0; i < p_kf_.size(); ++i) {
+    if (isPersistentOutlier(i)) continue;
     const Vec3 q = R * p_kf_[i] + t;
     if (q.z() <= 1e-6) continue;
     const double ux = cam_.fx * q.x() / q.z() + cam_.cx, uy = cam_.fy * q.y() / q.z() + cam_.cy;
@@ -228,6 +230,18 @@ int EventTracker::evaluateSet(const cv::Mat& delta, const SE3& T_ef_kf, const Ve
 
 namespace {
 constexpr double kLambdaFloor = 1e-7;
+
+// Median of |r − median(r)|; 0 for no residuals.
+double medianAbsoluteDeviation(const Eigen::VectorXd& r) {
+  if (r.size() == 0) return 0;
+  std::vector<double> v(r.data(), r.data() + r.size());
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  const double med = *mid;
+  for (double& x : v) x = std::abs(x - med);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
 
 // The prior's cost ½ eᵀ Σ⁻¹ e (times the data variance) and its error e at T.
 double priorCost(const PosePrior* prior, double scale, const SE3& T, Vec6* e_out = nullptr) {
@@ -382,16 +396,8 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
   res.cost = cost;
   // Correlation of the normalized vectors: 1 - |r|^2 / 2.
   res.correlation = 1.0 - 0.5 * r.squaredNorm();
-  if (cfg_.adapt_huber && r.size() > 0) {
-    std::vector<double> v(r.data(), r.data() + r.size());
-    auto mid = v.begin() + v.size() / 2;
-    std::nth_element(v.begin(), mid, v.end());
-    const double med = *mid;
-    for (double& x : v) x = std::abs(x - med);
-    std::nth_element(v.begin(), mid, v.end());
-    const double mad = *mid;
-    if (mad > 0) huber_ = 1.345 * 1.4826 * mad, data_var_ = std::pow(1.4826 * mad, 2);
-  }
+  const double mad = (cfg_.adapt_huber || outlier_frames_ > 0) ? medianAbsoluteDeviation(r) : 0;
+  if (cfg_.adapt_huber && mad > 0) huber_ = 1.345 * 1.4826 * mad, data_var_ = std::pow(1.4826 * mad, 2);
   if (!T_ef_kf.translation().allFinite() || !nu.allFinite()) {
     res.failure = "solver diverged (non-finite state)";
   } else if (res.correlation < cfg_.min_correlation) {
@@ -399,8 +405,33 @@ TrackResult EventTracker::track(const EventFrame& ef, SE3& T_ef_kf, Vec6& nu, in
         "prediction does not explain the events (correlation " + std::to_string(res.correlation) + ")";
   } else {
     res.ok = true;
+    if (outlier_frames_ > 0 && mad > 0) countStrikes(r, 1.4826 * mad);
   }
   return res;
+}
+
+void EventTracker::setPersistentOutliers(int frames, double sigmas) {
+  if (frames < 0 || frames > 255 || (frames > 0 && !(sigmas > 0)))
+    throw std::invalid_argument("event tracker: persistent outliers need 0 <= frames <= 255 and sigmas > 0");
+  if (frames == 0 && outlier_frames_ > 0) std::fill(strikes_.begin(), strikes_.end(), 0);
+  outlier_frames_ = frames;
+  outlier_sigmas_ = sigmas;
+}
+
+int EventTracker::numPersistentOutliers() const {
+  int n = 0;
+  for (std::size_t i = 0; i < strikes_.size(); ++i) n += isPersistentOutlier(i);
+  return n;
+}
+
+// r holds the last solve's residuals, in the order of its set (solve_set_); points outside the set
+// keep their counts.
+void EventTracker::countStrikes(const Eigen::VectorXd& r, double sigma) {
+  const double limit = outlier_sigmas_ * sigma;
+  for (Eigen::Index k = 0; k < r.size(); ++k) {
+    std::uint8_t& s = strikes_[static_cast<std::size_t>(solve_set_[static_cast<std::size_t>(k)])];
+    s = std::abs(r[k]) > limit ? static_cast<std::uint8_t>(std::min(255, s + 1)) : 0;
+  }
 }
 
 cv::Mat EventTracker::predictedImage(const SE3& T_ef_kf, const Vec6& nu, int width, int height) const {

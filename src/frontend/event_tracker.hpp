@@ -12,6 +12,7 @@
 // A 12x12 normal-equation solve per iteration needs no sparse machinery, and one pass over the
 // points builds it: no per-residual-block overhead.
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,18 @@ class EventTracker {
   void setKeyframe(const Keyframe& kf, int max_points = 0);
   std::size_t numPoints() const { return p_kf_.size(); }
 
+  // While frames > 0, each successful track() counts per point the event frames in a row whose
+  // residual lies beyond `sigmas` robust standard deviations (1.4826 MAD of that solve's residuals);
+  // a point with `frames` of them is left out of the solves until the next setKeyframe. Points the
+  // reference sees but the camera no longer does (hidden behind a nearer object) disagree with every
+  // event frame, while noise does not persist. frames 0: off, the counts cleared and every point back.
+  void setPersistentOutliers(int frames, double sigmas);
+  // Points left out by that rule: how many, and whether the i-th (setKeyframe's order) is one.
+  int numPersistentOutliers() const;
+  bool isPersistentOutlier(std::size_t i) const {
+    return outlier_frames_ > 0 && strikes_[i] >= outlier_frames_;
+  }
+
   // Refines T_ef_kf and nu (unit 6-vector) from their initial values. If nu is zero, it is
   // initialized by linear least squares given the initial pose.
   // `levels` overrides the configured coarse-to-fine levels (a warm-started frame needs only 1).
@@ -113,6 +126,11 @@ class EventTracker {
   std::vector<Row6> a_;      // EGM rows
   std::vector<Vec3> g_rho_;  // keyframe log gradient (gx, gy) and inverse depth, for linearizeAt
   std::vector<cv::Point2f> px_kf_;
+  // Event frames in a row each point was an outlier in (setPersistentOutliers); saturates at 255.
+  std::vector<std::uint8_t> strikes_;
+  int outlier_frames_ = 0;
+  double outlier_sigmas_ = 0;
+  void countStrikes(const Eigen::VectorXd& r, double sigma);
   // One Levenberg-Marquardt solve on one (blurred) event frame; returns the points in view.
   int solveLevel(const cv::Mat& img, SE3& T_ef_kf, Vec6& nu, const PosePrior* prior, Eigen::VectorXd& r,
                  Eigen::MatrixXd& J, double& cost, int& iterations) const;

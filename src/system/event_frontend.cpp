@@ -68,6 +68,12 @@ void PointBudgetConfig::validate() const {
         "events.point_budget: points_per_second must be >= 0 (0: every point), max_frame_gap_s > 0");
 }
 
+void PersistentOutlierConfig::validate() const {
+  if (frames < 0 || frames > 255 || !(sigmas > 0) || !(min_frame_gap_s >= 0))
+    throw std::invalid_argument(
+        "events.persistent_outliers: frames must be in [0, 255] (0: off), sigmas > 0, min_frame_gap_s >= 0");
+}
+
 void MotionPriorConfig::validate() const {
   if (!(sigma_translation > 0) || !(sigma_rotation > 0) || !(accel >= 0) || !(ang_accel >= 0) ||
       !(max_gap_s > 0))
@@ -82,6 +88,13 @@ EventFrontend::EventFrontend(const CameraModel& pinhole, EventFrontendConfig cfg
   cfg_.motion_prior.validate();
   cfg_.lost_track.validate();
   cfg_.point_budget.validate();
+  cfg_.persistent_outliers.validate();
+}
+
+bool EventFrontend::framesSparse(TimeNs t) const {
+  const double gap = cfg_.persistent_outliers.min_frame_gap_s;
+  if (t_u1_ < 0 || toSeconds(t - t_u1_) > gap) return true;
+  return t_u0_ >= 0 && toSeconds(t_u1_ - t_u0_) > gap;
 }
 
 int EventFrontend::maxReferencePoints() const {
@@ -254,16 +267,18 @@ std::optional<SE3> EventFrontend::solve(const EventFrame& ef, const SE3& T_init,
     tracker_.setKeyframe(ref_);
     thinned_ = false;
   }
+  const PersistentOutlierConfig& po = cfg_.persistent_outliers;
+  tracker_.setPersistentOutliers(framesSparse(ef.t) ? po.frames : 0, po.sigmas);
   const TrackResult tr = tracker_.track(ef, T, nu, levels, motion);
   last_correlation_ = tr.correlation;
   if (logEnabled(LogLevel::kDebug)) {
     const Vec6 dev = motion ? Vec6((T * motion->T_ef_kf.inverse()).log()) : Vec6::Zero();
     logf(LogLevel::kDebug,
          "[events] t %.3f corr %.3f it %d pts %d prior %d sigma_t %.4f dev_t %.4f dev_r %.4f "
-         "init_dev_t %.4f",
+         "init_dev_t %.4f left_out %d",
          toSeconds(ef.t), tr.correlation, tr.iterations, tr.points_in_view, motion != nullptr,
          motion ? motion->sigma[0] : 0.0, dev.head<3>().norm(), dev.tail<3>().norm(),
-         (T * T_init.inverse()).translation().norm());
+         (T * T_init.inverse()).translation().norm(), tracker_.numPersistentOutliers());
   }
   if (!tr.ok) {
     if (failure) *failure = tr.failure;

@@ -60,6 +60,21 @@ struct PointBudgetConfig {
 
 EDS_FIELDS(PointBudgetConfig, points_per_second, max_frame_gap_s)
 
+// Points that stay outliers while frames are sparse (EventTracker::setPersistentOutliers): a point
+// whose residual is beyond `sigmas` robust σ in `frames` event frames in a row is left out until the
+// next reference. A second between frames, near objects sweep over the reference's far points; with
+// frames close together the reference is renewed first, and left-out points only cost accuracy. The
+// rule applies while the last two usable frames are more than min_frame_gap_s apart, or none came for
+// that long. frames 0: never.
+struct PersistentOutlierConfig {
+  int frames = 3;
+  double sigmas = 3.5;
+  double min_frame_gap_s = 0.3;
+  void validate() const;
+};
+
+EDS_FIELDS(PersistentOutlierConfig, frames, sigmas, min_frame_gap_s)
+
 struct EventFrontendConfig {
   EventTrackerConfig tracker;
   // Selection on the keyframe's log gradient. Beyond a DAVIS346's pixel count the tracker keeps the
@@ -71,10 +86,11 @@ struct EventFrontendConfig {
   PointBudgetConfig point_budget;
   MotionPriorConfig motion_prior;
   LostTrackConfig lost_track;
+  PersistentOutlierConfig persistent_outliers;
 };
 
 EDS_FIELDS(EventFrontendConfig, tracker, points, fill, depth_median_px, point_budget, motion_prior,
-           lost_track)
+           lost_track, persistent_outliers)
 
 class EventFrontend {
  public:
@@ -163,9 +179,10 @@ class EventFrontend {
   static constexpr std::size_t kRateWindow = 16;
   std::array<TimeNs, kRateWindow> ef_times_{};
   std::size_t ef_count_ = 0;
-  TimeNs t_u0_ = -1, t_u1_ = -1;   // the last two usable frames
-  bool thinned_ = false;           // the tracker has a subset of the reference's points
-  int maxReferencePoints() const;  // 0: all
+  TimeNs t_u0_ = -1, t_u1_ = -1;      // the last two usable frames
+  bool thinned_ = false;              // the tracker has a subset of the reference's points
+  int maxReferencePoints() const;     // 0: all
+  bool framesSparse(TimeNs t) const;  // the persistent-outlier rule applies at time t
   void setTrackerReference();
   // The last two frames' poses (world), for the motion prior.
   TimeNs t_f0_ = -1, t_f1_ = -1;

@@ -133,6 +133,64 @@ double translationErrorMm(const SE3& T, const SE3& T_true) {
   return (T.inverse().translation() - T_true.inverse().translation()).norm() * 1000.0;
 }
 
+// A nearer object hides part of the keyframe's view: the events in the left third of the event frame
+// come from elsewhere (the frame's own content 120 px to the right). Tracked again and again, as
+// consecutive event frames are, the points that land there disagree every time; the persistent-outlier
+// rule leaves most of them out and few others, and the pose is then better than with them weighed down
+// by the Huber loss alone.
+TEST(EventTrackerOnSim, PointsHiddenByANearerObjectAreLeftOutAndFewOthers) {
+  SimEventFrameCase o = makeOneEventFrame();
+  const EventFrame clean = {o.ef.t, o.ef.t_first, o.ef.t_last, o.ef.delta.clone(), 0};
+  constexpr int kHiddenCols = 80, kShift = 120;
+  for (int y = 0; y < o.ef.delta.rows; ++y)
+    for (int x = 0; x < kHiddenCols; ++x) o.ef.delta.at<float>(y, x) = o.ef.delta.at<float>(y, x + kShift);
+  const auto solve = [&](int frames, EventTracker& tracker) {
+    tracker.setKeyframe(o.kf);
+    tracker.setPersistentOutliers(frames, 2.0);
+    SE3 T = o.T_ef_kf_true;
+    Vec6 nu = Vec6::Zero();
+    for (int k = 0; k < 8; ++k) EXPECT_TRUE(tracker.track(o.ef, T, nu).ok) << "track " << k;
+    return T;
+  };
+  EventTracker with(o.cam, {}), without(o.cam, {});
+  const SE3 T_with = solve(3, with), T_without = solve(0, without);
+  ASSERT_EQ(with.numPoints(), o.kf.points.size());
+  int hidden = 0, hidden_out = 0, clear = 0, clear_out = 0;
+  for (std::size_t i = 0; i < o.kf.points.size(); ++i) {
+    const KeyframePoint& p = o.kf.points[i];
+    const double x = o.cam.project(o.T_ef_kf_true * (o.cam.pinholeRay(p.u, p.v) / p.inv_depth)).x();
+    const bool out = with.isPersistentOutlier(i);
+    if (x < kHiddenCols - 4) hidden++, hidden_out += out;
+    if (x > kHiddenCols + 4) clear++, clear_out += out;
+  }
+  const double err_with = translationErrorMm(T_with, o.T_ef_kf_true);
+  const double err_without = translationErrorMm(T_without, o.T_ef_kf_true);
+  std::printf(
+      "[ tracker on sim ] hidden third: %d of %d hidden points left out, %d of %d others; error "
+      "%.3f mm (%.3f mm without the rule)\n",
+      hidden_out, hidden, clear_out, clear, err_with, err_without);
+  // Measured: 1060 of 1635 hidden, 122 of ~3300 others; 11.6 mm against 15.2 mm (a third of the view
+  // wrong pulls the pose before the rule catches up: the first three tracks weigh every point).
+  EXPECT_EQ(without.numPersistentOutliers(), 0);
+  EXPECT_GE(hidden_out, hidden / 2);
+  EXPECT_LE(clear_out, clear / 20);
+  EXPECT_LT(err_with, 0.85 * err_without);
+  // Hidden in every other event frame only: the hidden points are outliers every other time, never
+  // three times in a row. Measured 263 left out (the pose, pulled by the hidden third, also puts some
+  // points off on the clean frames); counted without the rows, 1504.
+  EventTracker alternating(o.cam, {});
+  alternating.setKeyframe(o.kf);
+  alternating.setPersistentOutliers(3, 2.0);
+  SE3 T = o.T_ef_kf_true;
+  Vec6 nu = Vec6::Zero();
+  for (int k = 0; k < 8; ++k) EXPECT_TRUE(alternating.track(k % 2 ? o.ef : clean, T, nu).ok);
+  EXPECT_LE(alternating.numPersistentOutliers(), hidden / 4);
+  with.setPersistentOutliers(0, 2.0);  // off: every point back
+  EXPECT_EQ(with.numPersistentOutliers(), 0);
+  EXPECT_THROW(with.setPersistentOutliers(-1, 2.0), std::invalid_argument);
+  EXPECT_THROW(with.setPersistentOutliers(3, 0.0), std::invalid_argument);
+}
+
 TEST(EventTrackerOnSim, APosePriorWeighsAsItsSigmaSays) {
   // A prior with a huge sigma leaves the events' answer; a tiny one is obeyed; one on translation
   // alone (what the frames' constant-velocity prediction gives between frames) pins the position and
