@@ -28,7 +28,13 @@ struct TrackOnlyConfig {
   // (noisy depth attenuates the tracker's translation: with 10 % noise on the ESIM plane the ATE is
   // 15 cm unfiltered, 0.9 cm at 10 px) and the lost-track check (a lost event frame's pose is not
   // kept; the next keyframe's frame is aligned from the last good pose).
-  EventFrontendConfig events;
+  // Without the persistent-outlier rule: no frames gate it here, and keyframes of known depth come at
+  // the keyframe rate.
+  EventFrontendConfig events = [] {
+    EventFrontendConfig c;
+    c.persistent_outliers.frames = 0;
+    return c;
+  }();
   KeyframePolicyConfig policy;
   FrameTrackerConfig frame_tracker;
   // A new keyframe's pose: the event pose at its frame's time, refined by aligning the frame to the
